@@ -1,0 +1,178 @@
+//! `pathtracer`: a progressive, physically based GPU path tracer.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_render::output::{self, OutputFormat};
+use pt_render::renderer::render_progressive;
+use pt_render::{Backend, RenderSettings, Renderer, Scene};
+
+#[derive(Parser)]
+#[command(
+    name = "pathtracer",
+    version,
+    about = "A progressive, physically based GPU path tracer"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG (tone-mapped sRGB) or EXR (linear radiance) file.
+    Render(RenderArgs),
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum BackendArg {
+    /// The rust-gpu kernel on the best Vulkan adapter (a real GPU, else lavapipe).
+    Gpu,
+    /// The same code on all CPU cores.
+    Cpu,
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum TonemapArg {
+    /// ACES filmic curve (Narkowicz fit).
+    Aces,
+    /// Clamp to [0, 1].
+    Clamp,
+}
+
+#[derive(Args, Clone)]
+struct RenderArgs {
+    /// Scene file (TOML); the built-in default scene when absent.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Image width in pixels [default: the scene's, else 512].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's, else 512].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// Samples per pixel [default: the scene's, else 256].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Maximum scattering events per path; 1 is direct light only [default: the scene's, else 5].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
+    max_bounces: Option<u32>,
+    /// Random seed: renders with different seeds are independent.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Which renderer traces the paths.
+    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
+    backend: BackendArg,
+    /// Output file: .png (exposure, tone map, sRGB) or .exr (linear mean radiance).
+    #[arg(long, default_value = "render.png")]
+    out: PathBuf,
+    /// Samples per pixel per frame (one GPU dispatch each).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    spp_per_frame: u32,
+    /// Exposure in stops, PNG only.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone mapper, PNG only.
+    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
+    tonemap: TonemapArg,
+}
+
+impl Default for RenderArgs {
+    /// The arguments of a bare `pathtracer render`.
+    fn default() -> Self {
+        match Cli::parse_from(["pathtracer", "render"]).command {
+            Some(Command::Render(args)) => args,
+            _ => unreachable!("`pathtracer render` parses as the render command"),
+        }
+    }
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Render(args)) => render(&args),
+        None => render(&RenderArgs::default()),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn load_scene(path: Option<&PathBuf>) -> Result<Scene> {
+    Ok(match path {
+        Some(p) => Scene::load(p)?,
+        None => Scene::default_scene(),
+    })
+}
+
+fn render(args: &RenderArgs) -> Result<()> {
+    if !args.exposure.is_finite() {
+        anyhow::bail!("--exposure must be a finite number");
+    }
+    // Everything the user gave is checked before any work starts, and the
+    // output's folder must take a file: a bad argument never costs a render.
+    let format = output::check_writable(&args.out)?;
+    let scene = load_scene(args.scene.as_ref())?;
+    let settings = RenderSettings {
+        width: args.width.unwrap_or(scene.render.width),
+        height: args.height.unwrap_or(scene.render.height),
+        spp: args.spp.unwrap_or(scene.render.spp),
+        max_bounces: args.max_bounces.unwrap_or(scene.render.max_bounces),
+        rr_start: scene.render.rr_start,
+    };
+    let backend = match args.backend {
+        BackendArg::Gpu => Backend::Gpu,
+        BackendArg::Cpu => Backend::Cpu,
+    };
+    let tonemap = match args.tonemap {
+        TonemapArg::Aces => TONEMAP_ACES,
+        TonemapArg::Clamp => TONEMAP_CLAMP,
+    };
+    let params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
+    let mut renderer = Renderer::new(backend, params, &scene.gpu_walls(), &scene.gpu_spheres())
+        .context("cannot start the renderer")?;
+    eprintln!("{}", renderer.description());
+    eprintln!(
+        "rendering {}x{}, {} spp, max {} bounces, seed {}",
+        settings.width, settings.height, settings.spp, settings.max_bounces, args.seed
+    );
+
+    let bar = ProgressBar::new(settings.spp as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed_precise} (eta {eta})")
+            .expect("valid progress template"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(200));
+    let (accum, stats) =
+        render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| {
+            bar.set_position(done as u64)
+        })
+        .context("rendering failed")?;
+    bar.finish_and_clear();
+
+    match format {
+        OutputFormat::Png => {
+            let rgba = renderer
+                .display(args.exposure, tonemap)
+                .context("display pass failed")?;
+            output::write_png(&args.out, settings.width, settings.height, &rgba)?;
+        }
+        OutputFormat::Exr => output::write_exr(
+            &args.out,
+            settings.width,
+            settings.height,
+            &output::mean_radiance(&accum),
+        )?,
+    }
+    println!("adapter: {}", renderer.description());
+    println!("time: {:.3} s", stats.elapsed.as_secs_f64());
+    println!("samples per second: {:.3e}", stats.samples_per_second());
+    println!("non-finite samples: {}", stats.non_finite);
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

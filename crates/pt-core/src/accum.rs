@@ -1,0 +1,63 @@
+//! Progressive accumulation: a compensated sum per pixel.
+
+use bytemuck::{Pod, Zeroable};
+use spirv_std::glam::Vec3;
+
+/// The samples of one pixel in one frame.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct PixelSamples {
+    /// Sum of the finite sample radiances.
+    pub sum: Vec3,
+    /// Number of finite samples in `sum`.
+    pub valid: u32,
+    /// Number of samples discarded because a channel was NaN or infinite.
+    pub non_finite: u32,
+}
+
+/// One pixel of the accumulation buffer.
+///
+/// The running sum is Kahan-compensated: a plain f32 sum stops growing once
+/// it is 2^24 times a sample, which would freeze a progressive image; with
+/// the compensation term the mean stays accurate to a few ulps whatever the
+/// sample count (Kahan 1965; Higham, "Accuracy and Stability", 4.3).
+#[repr(C)]
+#[derive(Copy, Clone, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AccumPixel {
+    /// Sum of accepted sample radiances, linear RGB.
+    pub sum: Vec3,
+    /// Number of accepted samples.
+    pub samples: u32,
+    /// Kahan compensation: the low-order part lost from `sum`, negated.
+    pub compensation: Vec3,
+    /// Number of samples discarded as NaN or infinite.
+    pub non_finite: u32,
+}
+
+impl AccumPixel {
+    /// Adds one frame's samples.
+    pub fn add(&mut self, s: PixelSamples) {
+        let y = s.sum - self.compensation;
+        let t = self.sum + y;
+        self.compensation = (t - self.sum) - y;
+        self.sum = t;
+        self.samples += s.valid;
+        self.non_finite += s.non_finite;
+    }
+
+    /// Mean radiance of the accepted samples (zero when there are none).
+    pub fn mean(&self) -> Vec3 {
+        if self.samples == 0 {
+            Vec3::ZERO
+        } else {
+            // sum - compensation carries the bits the plain sum lost.
+            (self.sum - self.compensation) / self.samples as f32
+        }
+    }
+}
+
+/// Whether every channel is finite. Tested on the bit pattern, which no
+/// driver's fast-math can fold away (unlike `x == x`).
+pub fn is_finite(v: Vec3) -> bool {
+    let m = 0x7f80_0000;
+    (v.x.to_bits() & m) != m && (v.y.to_bits() & m) != m && (v.z.to_bits() & m) != m
+}

@@ -1,0 +1,280 @@
+//! The path loop: closest hits, next-event estimation with MIS, Russian
+//! roulette, and the per-pixel sample loop that the kernel wraps.
+
+use spirv_std::glam::Vec3;
+
+use crate::accum::{PixelSamples, is_finite};
+use crate::light::light_cone;
+use crate::params::{FLAG_MIS, FLAG_NEE, FrameParams};
+use crate::ray::{Ray, offset_origin};
+use crate::rng::Rng;
+use crate::sampling::{PI, cosine_hemisphere, power_heuristic};
+use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point};
+use crate::wall::{Wall, intersect_wall};
+
+/// What a ray hit. `u32`-sized: SPIR-V has no 8-bit integers without the
+/// Int8 capability.
+#[repr(u32)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum HitKind {
+    /// Nothing: the ray leaves the scene.
+    Nothing,
+    /// Wall number `index`.
+    Wall,
+    /// Sphere number `index`.
+    Sphere,
+    /// The light.
+    Light,
+}
+
+/// The closest hit along a ray.
+#[derive(Copy, Clone, Debug)]
+pub struct Hit {
+    /// Ray parameter of the hit (the search limit when nothing was hit).
+    pub t: f32,
+    /// What was hit.
+    pub kind: HitKind,
+    /// Index of the wall or sphere hit.
+    pub index: u32,
+}
+
+/// "No limit" for ray parameters. Not `f32::INFINITY`: naga rejects an
+/// infinite literal in a SPIR-V module.
+pub const T_FAR: f32 = f32::MAX;
+
+/// No wall to skip.
+pub const NO_WALL: u32 = u32::MAX;
+
+/// Minimum Russian roulette survival probability: a path is never killed
+/// with certainty, and its weight grows by at most 1/0.05 = 20.
+pub const RR_MIN_SURVIVAL: f32 = 0.05;
+
+/// The closest hit in (0, `t_max`) over walls, spheres and the light, brute
+/// force. `skip_wall` is the wall the ray leaves from: a plane cannot be hit
+/// again by a ray that leaves it, so testing it could only find rounding
+/// noise.
+pub fn closest_hit(
+    ray: &Ray,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    skip_wall: u32,
+    t_max: f32,
+) -> Hit {
+    let mut hit = Hit {
+        t: t_max,
+        kind: HitKind::Nothing,
+        index: 0,
+    };
+    let mut i = 0;
+    while i < params.wall_count {
+        if i != skip_wall {
+            let t = intersect_wall(&walls[i as usize], ray, 0.0, hit.t);
+            if t < hit.t {
+                hit = Hit {
+                    t,
+                    kind: HitKind::Wall,
+                    index: i,
+                };
+            }
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < params.sphere_count {
+        let s = spheres[i as usize];
+        let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
+        if t < hit.t {
+            hit = Hit {
+                t,
+                kind: HitKind::Sphere,
+                index: i,
+            };
+        }
+        i += 1;
+    }
+    let t = intersect_sphere(params.light.center, params.light.radius, ray, 0.0, hit.t);
+    if t < hit.t {
+        hit = Hit {
+            t,
+            kind: HitKind::Light,
+            index: 0,
+        };
+    }
+    hit
+}
+
+/// Whether a wall or sphere blocks the ray in (0, `t_max`). The light is no
+/// occluder of itself: shadow rays end on its surface.
+pub fn occluded(
+    ray: &Ray,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    skip_wall: u32,
+    t_max: f32,
+) -> bool {
+    let mut i = 0;
+    while i < params.wall_count {
+        if i != skip_wall && intersect_wall(&walls[i as usize], ray, 0.0, t_max) < t_max {
+            return true;
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < params.sphere_count {
+        let s = spheres[i as usize];
+        if intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max {
+            return true;
+        }
+        i += 1;
+    }
+    false
+}
+
+/// Radiance arriving along `ray`: one path sample, unbiased for
+/// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
+pub fn trace_path(
+    mut ray: Ray,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    rng: &mut Rng,
+) -> Vec3 {
+    let nee = params.flags & FLAG_NEE != 0;
+    let mis = params.flags & FLAG_MIS != 0;
+    let light = params.light;
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let mut bounces = 0u32;
+    let mut skip_wall = NO_WALL;
+    // Densities with which the BSDF and NEE could have produced the current
+    // ray's direction (solid angle), for the MIS weight of a light hit.
+    let mut bsdf_pdf = 0.0f32;
+    let mut nee_pdf = 0.0f32;
+
+    loop {
+        let hit = closest_hit(&ray, params, walls, spheres, skip_wall, T_FAR);
+        if hit.kind == HitKind::Nothing {
+            radiance += throughput * params.background;
+            break;
+        }
+        if hit.kind == HitKind::Light {
+            // The light emits outward only; from inside it shows nothing.
+            let front = ray.dir.dot(ray.at(hit.t) - light.center) < 0.0;
+            if front {
+                let weight = if bounces == 0 || !nee || nee_pdf == 0.0 {
+                    // Camera rays, or no NEE could have found this light.
+                    1.0
+                } else if mis {
+                    power_heuristic(bsdf_pdf, nee_pdf)
+                } else {
+                    // NEE alone accounts for light reached after a bounce.
+                    0.0
+                };
+                radiance += throughput * light.radiance * weight;
+            }
+            break;
+        }
+        if bounces >= params.max_bounces {
+            break;
+        }
+
+        // The surface point, its normal, its albedo and a bound on the
+        // magnitudes its coordinates were computed from.
+        let (p, normal, albedo, magnitude, wall_index) = if hit.kind == HitKind::Wall {
+            let w = walls[hit.index as usize];
+            let magnitude = ray.origin.abs() + (ray.dir * hit.t).abs();
+            (ray.at(hit.t), w.normal, w.albedo, magnitude, hit.index)
+        } else {
+            let s = spheres[hit.index as usize];
+            let (p, n) = sphere_hit_point(s.center, s.radius, &ray, hit.t);
+            (
+                p,
+                n,
+                s.albedo,
+                s.center.abs() + Vec3::splat(s.radius),
+                NO_WALL,
+            )
+        };
+        // Shade the side the ray arrived on: walls are two-sided, and a
+        // camera inside a sphere sees its inside.
+        let n = if normal.dot(ray.dir) < 0.0 {
+            normal
+        } else {
+            -normal
+        };
+        let origin = offset_origin(p, n, magnitude);
+
+        // Next-event estimation: one shadow ray toward the light's cone.
+        let cone = light_cone(&light, origin);
+        let cone_pdf = cone.pdf();
+        if nee && !cone.is_empty() {
+            let (dir, dist) = cone.sample(rng.next_f32(), rng.next_f32());
+            let cos = n.dot(dir);
+            if cos > 0.0 {
+                let shadow = Ray { origin, dir };
+                if !occluded(&shadow, params, walls, spheres, wall_index, dist) {
+                    let bsdf = cos * (1.0 / PI);
+                    let weight = if mis {
+                        power_heuristic(cone_pdf, bsdf)
+                    } else {
+                        1.0
+                    };
+                    // f cos / pdf = (albedo / pi) cos / cone_pdf
+                    radiance += throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
+                }
+            }
+        }
+
+        // BSDF sampling: cosine-weighted, so f cos / pdf = albedo.
+        let dir = cosine_hemisphere(n, rng.next_f32(), rng.next_f32());
+        bsdf_pdf = n.dot(dir).max(0.0) * (1.0 / PI);
+        nee_pdf = cone_pdf;
+        throughput *= albedo;
+        bounces += 1;
+
+        // Russian roulette: survive with a probability that follows the
+        // throughput, and divide by it so the estimate stays unbiased.
+        if bounces >= params.rr_start {
+            let survive = throughput.max_element().clamp(RR_MIN_SURVIVAL, 1.0);
+            if rng.next_f32() >= survive {
+                break;
+            }
+            throughput /= survive;
+        }
+
+        ray = Ray { origin, dir };
+        skip_wall = wall_index;
+    }
+    radiance
+}
+
+/// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame` camera
+/// rays jittered uniformly in the pixel (a box filter), non-finite results
+/// counted and discarded.
+pub fn render_pixel(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+) -> PixelSamples {
+    let mut out = PixelSamples::default();
+    let mut s = 0;
+    while s < params.samples_per_frame {
+        let mut rng = Rng::new(x, y, params.frame, s, params.seed);
+        let fx = x as f32 + rng.next_f32();
+        let fy = y as f32 + rng.next_f32();
+        let ray = params.camera.ray(fx, fy, params.width, params.height);
+        let l = trace_path(ray, params, walls, spheres, &mut rng);
+        if is_finite(l) {
+            out.sum += l;
+            out.valid += 1;
+        } else {
+            out.non_finite += 1;
+        }
+        s += 1;
+    }
+    out
+}

@@ -1,0 +1,61 @@
+//! Per-frame parameters: everything the kernel reads besides the geometry.
+
+use bytemuck::{Pod, Zeroable};
+use spirv_std::glam::Vec3;
+
+use crate::camera::Camera;
+use crate::light::SphereLight;
+
+/// `flags` bit: next-event estimation (shadow rays to the light).
+pub const FLAG_NEE: u32 = 1;
+/// `flags` bit: combine next-event estimation with BSDF sampling by MIS
+/// (power heuristic). Without it, light reached by BSDF rays is dropped
+/// while NEE is on.
+pub const FLAG_MIS: u32 = 2;
+/// The default: NEE with MIS.
+pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS;
+
+/// `tonemap`: clamp to [0, 1] (no curve).
+pub const TONEMAP_CLAMP: u32 = 0;
+/// `tonemap`: the ACES filmic fit of Narkowicz (2015).
+pub const TONEMAP_ACES: u32 = 1;
+
+/// The kernel's uniform block. Every `Vec3` sits at a multiple of 16 bytes
+/// and the struct is a multiple of 16 bytes, which satisfies std140.
+#[repr(C)]
+#[derive(Copy, Clone, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct FrameParams {
+    /// The camera.
+    pub camera: Camera,
+    /// The light.
+    pub light: SphereLight,
+    /// Radiance of rays that leave the scene, linear RGB.
+    pub background: Vec3,
+    /// Display exposure in stops: the mean is scaled by 2^exposure before
+    /// tone mapping. Display only: never restarts accumulation.
+    pub exposure: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Frame index: one per accumulation dispatch, part of the RNG seed.
+    pub frame: u32,
+    /// Camera samples per pixel in this frame.
+    pub samples_per_frame: u32,
+    /// Maximum scattering events on a path (DESIGN section 4).
+    pub max_bounces: u32,
+    /// Russian roulette starts once a path has this many bounces.
+    pub rr_start: u32,
+    /// User seed, mixed into the RNG.
+    pub seed: u32,
+    /// Number of walls in the wall buffer.
+    pub wall_count: u32,
+    /// Number of spheres in the sphere buffer.
+    pub sphere_count: u32,
+    /// Tone mapper of the display pass (`TONEMAP_*`). Display only.
+    pub tonemap: u32,
+    /// Integrator switches (`FLAG_*`).
+    pub flags: u32,
+    /// Padding to a 16-byte multiple.
+    pub _pad: u32,
+}

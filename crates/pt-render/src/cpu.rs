@@ -1,0 +1,73 @@
+//! The CPU renderer: the kernel's own `render_pixel`, in parallel over rows
+//! with rayon. It is the reference in tests and a user-selectable backend.
+
+use pt_core::tonemap::{display_color, pack_rgba8};
+use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator};
+use rayon::prelude::*;
+
+/// The progressive CPU renderer for one scene and image size.
+pub struct CpuRenderer {
+    params: FrameParams,
+    walls: Vec<Wall>,
+    spheres: Vec<Sphere>,
+    accum: Vec<AccumPixel>,
+    next_frame: u32,
+}
+
+impl CpuRenderer {
+    /// A renderer for `params` and geometry, with an empty accumulation.
+    pub fn new(params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Self {
+        let pixels = params.width as usize * params.height as usize;
+        Self {
+            params,
+            walls: walls.to_vec(),
+            spheres: spheres.to_vec(),
+            accum: vec![AccumPixel::default(); pixels],
+            next_frame: 0,
+        }
+    }
+
+    /// The current parameters.
+    pub fn params(&self) -> &FrameParams {
+        &self.params
+    }
+
+    /// Adds one frame of `samples` samples per pixel, as the GPU's
+    /// `accumulate` entry point does, with the same frame numbering.
+    pub fn render_frame(&mut self, samples: u32) {
+        self.params.frame = self.next_frame;
+        self.params.samples_per_frame = samples;
+        let params = self.params;
+        let (walls, spheres) = (&self.walls[..], &self.spheres[..]);
+        let width = params.width as usize;
+        self.accum
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, px) in row.iter_mut().enumerate() {
+                    px.add(integrator::render_pixel(
+                        x as u32, y as u32, &params, walls, spheres,
+                    ));
+                }
+            });
+        self.next_frame += 1;
+    }
+
+    /// Frames accumulated so far.
+    pub fn frames(&self) -> u32 {
+        self.next_frame
+    }
+
+    /// The accumulation buffer.
+    pub fn accum(&self) -> &[AccumPixel] {
+        &self.accum
+    }
+
+    /// The display pass on the CPU: the same transform as the kernel's.
+    pub fn display(&self, exposure: f32, tonemap: u32) -> Vec<u32> {
+        self.accum
+            .par_iter()
+            .map(|p| pack_rgba8(display_color(p.mean(), exposure, tonemap)))
+            .collect()
+    }
+}

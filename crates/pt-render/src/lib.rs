@@ -1,0 +1,14 @@
+//! Host side of the path tracer: scene files, the wgpu renderer, the CPU
+//! renderer, image output and error metrics.
+
+pub mod cpu;
+pub mod gpu;
+pub mod metrics;
+pub mod output;
+pub mod renderer;
+pub mod scene;
+
+pub use cpu::CpuRenderer;
+pub use gpu::{GpuContext, GpuError, GpuRenderer, KERNEL_SPV};
+pub use renderer::{Backend, Renderer};
+pub use scene::{RenderSettings, Scene, SceneError};

@@ -1,0 +1,144 @@
+//! Image files: PNG (display colours) and EXR (linear mean radiance),
+//! written to a temporary file and renamed, so a failure leaves nothing.
+
+use std::path::{Path, PathBuf};
+
+use pt_core::AccumPixel;
+
+/// Errors writing an image.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The extension is neither `.png` nor `.exr`.
+    #[error(
+        "{0}: unsupported output format: use a .png (tone-mapped sRGB) or .exr (linear radiance) file name"
+    )]
+    Format(PathBuf),
+    /// The file or its folder cannot be written.
+    #[error("{path}: cannot write the output file: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// The encoder failed.
+    #[error("{path}: cannot encode the image: {source}")]
+    Encode {
+        /// The file.
+        path: PathBuf,
+        /// The encoder's reason.
+        source: image::ImageError,
+    },
+}
+
+/// What an output file holds.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// Tone-mapped sRGB, 8 bits.
+    Png,
+    /// Linear mean radiance, 32-bit float RGB.
+    Exr,
+}
+
+/// The format an output path asks for, by extension.
+pub fn output_format(path: &Path) -> Result<OutputFormat, OutputError> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("png") => Ok(OutputFormat::Png),
+        Some("exr") => Ok(OutputFormat::Exr),
+        _ => Err(OutputError::Format(path.to_owned())),
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Checks, before any rendering, that `path` has a known format and that its
+/// folder takes a new file: a long render never ends in "cannot write".
+pub fn check_writable(path: &Path) -> Result<OutputFormat, OutputError> {
+    let format = output_format(path)?;
+    if path.is_dir() {
+        return Err(OutputError::Io {
+            path: path.to_owned(),
+            source: std::io::Error::other("is a directory"),
+        });
+    }
+    let probe = temp_path(path);
+    std::fs::write(&probe, b"").map_err(|source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(format)
+}
+
+/// Writes `path` atomically: encode into a temporary sibling, then rename.
+fn write_atomic(
+    path: &Path,
+    save: impl FnOnce(&Path) -> Result<(), image::ImageError>,
+) -> Result<(), OutputError> {
+    let tmp = temp_path(path);
+    if let Err(source) = save(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(match source {
+            image::ImageError::IoError(source) => OutputError::Io {
+                path: path.to_owned(),
+                source,
+            },
+            source => OutputError::Encode {
+                path: path.to_owned(),
+                source,
+            },
+        });
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::Io {
+            path: path.to_owned(),
+            source,
+        }
+    })
+}
+
+/// Writes packed RGBA8 display pixels (row 0 at the top) as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u32]) -> Result<(), OutputError> {
+    let bytes: Vec<u8> = bytemuck::cast_slice(rgba).to_vec();
+    let img =
+        image::RgbaImage::from_raw(width, height, bytes).expect("one packed pixel per image pixel");
+    write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::Png))
+}
+
+/// Mean radiance per pixel, linear RGB, row-major from the top.
+pub fn mean_radiance(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
+    accum.iter().map(|p| p.mean().to_array()).collect()
+}
+
+/// Writes linear mean radiance (row 0 at the top) as 32-bit float EXR.
+pub fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+) -> Result<(), OutputError> {
+    let data: Vec<f32> = rgb.iter().flatten().copied().collect();
+    let img = image::Rgb32FImage::from_raw(width, height, data).expect("one mean per image pixel");
+    write_atomic(path, |p| {
+        img.save_with_format(p, image::ImageFormat::OpenExr)
+    })
+}
+
+/// Reads an EXR's RGB as linear f32, row-major from the top.
+pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), image::ImageError> {
+    let img = image::open(path)?.into_rgb32f();
+    let (w, h) = img.dimensions();
+    Ok((w, h, img.pixels().map(|p| p.0).collect()))
+}

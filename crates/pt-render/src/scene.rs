@@ -1,0 +1,564 @@
+//! Scene files: TOML with unknown fields rejected, every value checked, and
+//! errors that name the file, the line and the field.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use pt_core::glam::Vec3;
+use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
+use pt_core::{Camera, FrameParams, Sphere, SphereLight, Wall};
+use serde::Deserialize;
+use toml::Spanned;
+
+/// The built-in default scene: `scenes/default.toml`, embedded.
+pub const DEFAULT_SCENE_TOML: &str = include_str!("../../../scenes/default.toml");
+/// The name the embedded default scene goes by in messages.
+pub const DEFAULT_SCENE_NAME: &str = "<built-in default scene>";
+
+/// Largest image side accepted, in pixels (16K): beyond it buffers outgrow
+/// what GPUs bind.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Largest `max_bounces` accepted. Russian roulette ends paths long before.
+pub const MAX_BOUNCES_LIMIT: u32 = 1_000_000;
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{path}: cannot read the scene file: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// TOML syntax, a wrong type, a missing or unknown field.
+    #[error("{path}:{line}:{column}: {message}")]
+    Syntax {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// A value that parses but cannot be rendered.
+    #[error("{path}:{line}: {field}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the offending value.
+        line: usize,
+        /// Dotted path of the field, e.g. `spheres[1].radius`.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+}
+
+type V3 = Spanned<[f32; 3]>;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    background: Option<V3>,
+    camera: CameraFile,
+    #[serde(default)]
+    render: RenderFile,
+    light: LightFile,
+    #[serde(default)]
+    walls: Vec<WallFile>,
+    #[serde(default)]
+    spheres: Vec<SphereFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraFile {
+    position: V3,
+    look_at: V3,
+    #[serde(default)]
+    up: Option<V3>,
+    vfov_degrees: Spanned<f32>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderFile {
+    width: Option<Spanned<i64>>,
+    height: Option<Spanned<i64>>,
+    spp: Option<Spanned<i64>>,
+    max_bounces: Option<Spanned<i64>>,
+    rr_start: Option<Spanned<i64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightFile {
+    center: V3,
+    radius: Spanned<f32>,
+    radiance: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WallFile {
+    #[serde(default)]
+    name: Option<String>,
+    corner: V3,
+    edge_u: V3,
+    edge_v: V3,
+    albedo: V3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereFile {
+    #[serde(default)]
+    name: Option<String>,
+    center: V3,
+    radius: Spanned<f32>,
+    albedo: V3,
+}
+
+/// The camera as a user describes it.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Pinhole position.
+    pub position: Vec3,
+    /// Point looked at.
+    pub look_at: Vec3,
+    /// Rough up direction.
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub vfov_degrees: f32,
+}
+
+impl CameraDesc {
+    /// The kernel's camera for a film of `width` x `height` pixels.
+    pub fn to_gpu(&self, width: u32, height: u32) -> Camera {
+        Camera::look_at(
+            self.position,
+            self.look_at,
+            self.up,
+            self.vfov_degrees,
+            width as f32 / height as f32,
+        )
+    }
+}
+
+/// Render settings; a scene file may set them, the command line overrides.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel in all.
+    pub spp: u32,
+    /// Maximum scattering events per path (DESIGN section 4).
+    pub max_bounces: u32,
+    /// Bounces before Russian roulette starts.
+    pub rr_start: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            spp: 256,
+            max_bounces: 5,
+            rr_start: 3,
+        }
+    }
+}
+
+/// A named wall.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedWall {
+    /// Name shown in the viewer and in messages.
+    pub name: String,
+    /// The wall.
+    pub wall: Wall,
+}
+
+/// A named sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedSphere {
+    /// Name shown in the viewer and in messages.
+    pub name: String,
+    /// The sphere.
+    pub sphere: Sphere,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// The light.
+    pub light: SphereLight,
+    /// The walls.
+    pub walls: Vec<NamedWall>,
+    /// The spheres.
+    pub spheres: Vec<NamedSphere>,
+    /// Radiance of escaping rays.
+    pub background: Vec3,
+    /// Render settings from the file (or defaults).
+    pub render: RenderSettings,
+}
+
+impl Scene {
+    /// The built-in default scene (DESIGN section 3).
+    pub fn default_scene() -> Self {
+        Self::from_toml(DEFAULT_SCENE_TOML, Path::new(DEFAULT_SCENE_NAME))
+            .expect("the embedded default scene is valid")
+    }
+
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Parses and validates scene TOML; `path` names it in messages.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let (line, column) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
+            SceneError::Syntax {
+                path: path.to_owned(),
+                line,
+                column,
+                message: e.message().trim().to_owned(),
+            }
+        })?;
+        Checker { text, path }.scene(file)
+    }
+
+    /// The kernel's walls.
+    pub fn gpu_walls(&self) -> Vec<Wall> {
+        self.walls.iter().map(|w| w.wall).collect()
+    }
+
+    /// The kernel's spheres.
+    pub fn gpu_spheres(&self) -> Vec<Sphere> {
+        self.spheres.iter().map(|s| s.sphere).collect()
+    }
+
+    /// The kernel's parameters for frame 0 of a render with `settings`.
+    pub fn frame_params(
+        &self,
+        settings: &RenderSettings,
+        samples_per_frame: u32,
+        seed: u32,
+    ) -> FrameParams {
+        FrameParams {
+            camera: self.camera.to_gpu(settings.width, settings.height),
+            light: self.light,
+            background: self.background,
+            exposure: 0.0,
+            width: settings.width,
+            height: settings.height,
+            frame: 0,
+            samples_per_frame,
+            max_bounces: settings.max_bounces,
+            rr_start: settings.rr_start,
+            seed,
+            wall_count: self.walls.len() as u32,
+            sphere_count: self.spheres.len() as u32,
+            tonemap: TONEMAP_ACES,
+            flags: FLAGS_DEFAULT,
+            _pad: 0,
+        }
+    }
+
+    /// The scene as TOML that [`Scene::from_toml`] reads back unchanged.
+    pub fn to_toml(&self) -> String {
+        let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
+        let mut s = String::new();
+        let _ = writeln!(s, "background = {}\n", v(self.background));
+        let c = &self.camera;
+        let _ = writeln!(
+            s,
+            "[camera]\nposition = {}\nlook_at = {}\nup = {}\nvfov_degrees = {:?}\n",
+            v(c.position),
+            v(c.look_at),
+            v(c.up),
+            c.vfov_degrees
+        );
+        let r = &self.render;
+        let _ = writeln!(
+            s,
+            "[render]\nwidth = {}\nheight = {}\nspp = {}\nmax_bounces = {}\nrr_start = {}\n",
+            r.width, r.height, r.spp, r.max_bounces, r.rr_start
+        );
+        let l = &self.light;
+        let _ = writeln!(
+            s,
+            "[light]\ncenter = {}\nradius = {:?}\nradiance = {}\n",
+            v(l.center),
+            l.radius,
+            v(l.radiance)
+        );
+        for w in &self.walls {
+            let g = &w.wall;
+            let _ = writeln!(
+                s,
+                "[[walls]]\nname = {:?}\ncorner = {}\nedge_u = {}\nedge_v = {}\nalbedo = {}\n",
+                w.name,
+                v(g.corner),
+                v(g.edge_u),
+                v(g.edge_v),
+                v(g.albedo)
+            );
+        }
+        for sp in &self.spheres {
+            let g = &sp.sphere;
+            let _ = writeln!(
+                s,
+                "[[spheres]]\nname = {:?}\ncenter = {}\nradius = {:?}\nalbedo = {}\n",
+                sp.name,
+                v(g.center),
+                g.radius,
+                v(g.albedo)
+            );
+        }
+        s
+    }
+}
+
+/// 1-based line and column of byte `offset` in `text`.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, column)
+}
+
+/// Validation with access to the source text for line numbers.
+struct Checker<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl Checker<'_> {
+    fn err<T>(
+        &self,
+        span: std::ops::Range<usize>,
+        field: &str,
+        message: impl Into<String>,
+    ) -> Result<T, SceneError> {
+        Err(SceneError::Invalid {
+            path: self.path.to_owned(),
+            line: line_col(self.text, span.start).0,
+            field: field.to_owned(),
+            message: message.into(),
+        })
+    }
+
+    fn finite(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
+        let a = *v.get_ref();
+        if a.iter().any(|x| !x.is_finite()) {
+            return self.err(
+                v.span(),
+                field,
+                format!("every component must be a finite number, got {a:?}"),
+            );
+        }
+        Ok(Vec3::from_array(a))
+    }
+
+    fn albedo(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
+        let a = self.finite(v, field)?;
+        if a.min_element() < 0.0 || a.max_element() > 1.0 {
+            return self.err(
+                v.span(),
+                field,
+                format!(
+                    "albedo components must lie in [0, 1], got {:?}",
+                    v.get_ref()
+                ),
+            );
+        }
+        Ok(a)
+    }
+
+    fn radius(&self, r: &Spanned<f32>, field: &str) -> Result<f32, SceneError> {
+        let x = *r.get_ref();
+        if !x.is_finite() || x <= 0.0 {
+            return self.err(
+                r.span(),
+                field,
+                format!("radius must be a positive finite number, got {x}"),
+            );
+        }
+        Ok(x)
+    }
+
+    fn count(
+        &self,
+        v: &Option<Spanned<i64>>,
+        field: &str,
+        default: u32,
+        min: i64,
+        max: u32,
+    ) -> Result<u32, SceneError> {
+        match v {
+            None => Ok(default),
+            Some(s) => {
+                let x = *s.get_ref();
+                if x < min || x > max as i64 {
+                    return self.err(
+                        s.span(),
+                        field,
+                        format!("must be an integer in [{min}, {max}], got {x}"),
+                    );
+                }
+                Ok(x as u32)
+            }
+        }
+    }
+
+    fn scene(&self, f: SceneFile) -> Result<Scene, SceneError> {
+        let background = match &f.background {
+            Some(b) => {
+                let v = self.finite(b, "background")?;
+                if v.min_element() < 0.0 {
+                    return self.err(b.span(), "background", "radiance cannot be negative");
+                }
+                v
+            }
+            None => Vec3::ZERO,
+        };
+
+        let c = &f.camera;
+        let position = self.finite(&c.position, "camera.position")?;
+        let look_at = self.finite(&c.look_at, "camera.look_at")?;
+        let up = match &c.up {
+            Some(u) => self.finite(u, "camera.up")?,
+            None => Vec3::Y,
+        };
+        let view = look_at - position;
+        if view.length_squared() == 0.0 || !view.length_squared().is_finite() {
+            return self.err(
+                c.look_at.span(),
+                "camera.look_at",
+                "must differ from camera.position",
+            );
+        }
+        if view.normalize().cross(up).length_squared() < 1e-12 {
+            let span = c.up.as_ref().map_or(c.look_at.span(), |u| u.span());
+            return self.err(
+                span,
+                "camera.up",
+                "must not be zero or parallel to the viewing direction",
+            );
+        }
+        let fov = *c.vfov_degrees.get_ref();
+        if !(fov > 0.0 && fov < 180.0) {
+            return self.err(
+                c.vfov_degrees.span(),
+                "camera.vfov_degrees",
+                format!("must lie in (0, 180), got {fov}"),
+            );
+        }
+
+        let d = RenderSettings::default();
+        let r = &f.render;
+        let render = RenderSettings {
+            width: self.count(&r.width, "render.width", d.width, 1, MAX_IMAGE_SIDE)?,
+            height: self.count(&r.height, "render.height", d.height, 1, MAX_IMAGE_SIDE)?,
+            spp: self.count(&r.spp, "render.spp", d.spp, 1, u32::MAX)?,
+            max_bounces: self.count(
+                &r.max_bounces,
+                "render.max_bounces",
+                d.max_bounces,
+                0,
+                MAX_BOUNCES_LIMIT,
+            )?,
+            rr_start: self.count(
+                &r.rr_start,
+                "render.rr_start",
+                d.rr_start,
+                1,
+                MAX_BOUNCES_LIMIT,
+            )?,
+        };
+
+        let l = &f.light;
+        let radiance = self.finite(&l.radiance, "light.radiance")?;
+        if radiance.min_element() < 0.0 {
+            return self.err(
+                l.radiance.span(),
+                "light.radiance",
+                "radiance cannot be negative",
+            );
+        }
+        let light = SphereLight::new(
+            self.finite(&l.center, "light.center")?,
+            self.radius(&l.radius, "light.radius")?,
+            radiance,
+        );
+
+        let mut walls = Vec::with_capacity(f.walls.len());
+        for (i, w) in f.walls.iter().enumerate() {
+            let field = |name: &str| format!("walls[{i}].{name}");
+            let corner = self.finite(&w.corner, &field("corner"))?;
+            let edge_u = self.finite(&w.edge_u, &field("edge_u"))?;
+            let edge_v = self.finite(&w.edge_v, &field("edge_v"))?;
+            let albedo = self.albedo(&w.albedo, &field("albedo"))?;
+            // Zero area: a zero edge, or edges (nearly) parallel.
+            let area = edge_u.cross(edge_v).length();
+            if !(area > 1e-6 * edge_u.length() * edge_v.length()) || !area.is_finite() {
+                return self.err(
+                    w.edge_v.span(),
+                    &field("edge_v"),
+                    "the wall has zero area: edges are zero or parallel",
+                );
+            }
+            let wall = Wall::new(corner, edge_u, edge_v, albedo);
+            walls.push(NamedWall {
+                name: w.name.clone().unwrap_or_else(|| format!("wall {}", i + 1)),
+                wall,
+            });
+        }
+
+        let mut spheres = Vec::with_capacity(f.spheres.len());
+        for (i, s) in f.spheres.iter().enumerate() {
+            let field = |name: &str| format!("spheres[{i}].{name}");
+            let sphere = Sphere::new(
+                self.finite(&s.center, &field("center"))?,
+                self.radius(&s.radius, &field("radius"))?,
+                self.albedo(&s.albedo, &field("albedo"))?,
+            );
+            spheres.push(NamedSphere {
+                name: s
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("sphere {}", i + 1)),
+                sphere,
+            });
+        }
+
+        Ok(Scene {
+            camera: CameraDesc {
+                position,
+                look_at,
+                up,
+                vfov_degrees: fov,
+            },
+            light,
+            walls,
+            spheres,
+            background,
+            render,
+        })
+    }
+}
