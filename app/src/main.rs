@@ -30,6 +30,8 @@ enum Command {
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
 enum BackendArg {
+    /// The GPU when a Vulkan adapter is present, else the CPU (with a notice).
+    Auto,
     /// The rust-gpu kernel on the best Vulkan adapter (a real GPU, else lavapipe).
     Gpu,
     /// The same code on all CPU cores.
@@ -65,7 +67,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the paths.
-    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     backend: BackendArg,
     /// Output file: .png (exposure, tone map, sRGB) or .exr (linear mean radiance).
     #[arg(long, default_value = "render.png")]
@@ -125,17 +127,21 @@ fn render(args: &RenderArgs) -> Result<()> {
         max_bounces: args.max_bounces.unwrap_or(scene.render.max_bounces),
         rr_start: scene.render.rr_start,
     };
-    let backend = match args.backend {
-        BackendArg::Gpu => Backend::Gpu,
-        BackendArg::Cpu => Backend::Cpu,
-    };
     let tonemap = match args.tonemap {
         TonemapArg::Aces => TONEMAP_ACES,
         TonemapArg::Clamp => TONEMAP_CLAMP,
     };
     let params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
-    let mut renderer = Renderer::new(backend, params, &scene.gpu_walls(), &scene.gpu_spheres())
-        .context("cannot start the renderer")?;
+    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    let mut renderer = match args.backend {
+        BackendArg::Gpu => Renderer::new(Backend::Gpu, params, &walls, &spheres)
+            .context("cannot start the GPU renderer")?,
+        BackendArg::Cpu => Renderer::new(Backend::Cpu, params, &walls, &spheres)?,
+        BackendArg::Auto => Renderer::new(Backend::Gpu, params, &walls, &spheres).or_else(|e| {
+            eprintln!("GPU unavailable ({e}); rendering on the CPU");
+            Renderer::new(Backend::Cpu, params, &walls, &spheres)
+        })?,
+    };
     eprintln!("{}", renderer.description());
     eprintln!(
         "rendering {}x{}, {} spp, max {} bounces, seed {}",

@@ -61,3 +61,46 @@ pub fn is_finite(v: Vec3) -> bool {
     let m = 0x7f80_0000;
     (v.x.to_bits() & m) != m && (v.y.to_bits() & m) != m && (v.z.to_bits() & m) != m
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_stays_right_after_2_pow_25_samples() {
+        // Case: a plain f32 sum of 0.1s stalls at 2^21 (where 0.1 is below
+        // half an ulp of the sum); the compensated mean must stay within
+        // 1e-5 relative of the f64 sum.
+        let mut p = AccumPixel::default();
+        let x = Vec3::new(0.1, 1.7, 3.3e-3);
+        let per_frame = 8;
+        let frames = (1u32 << 25) / per_frame;
+        for _ in 0..frames {
+            p.add(PixelSamples {
+                sum: x * per_frame as f32,
+                valid: per_frame,
+                non_finite: 0,
+            });
+        }
+        assert_eq!(p.samples, 1 << 25);
+        let m = p.mean();
+        for (got, want) in [(m.x, x.x), (m.y, x.y), (m.z, x.z)] {
+            assert!(((got - want) / want).abs() < 1e-5, "mean {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn non_finite_is_detected_on_every_channel() {
+        assert!(is_finite(Vec3::new(1.0, -2.0, f32::MAX)));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert!(!is_finite(Vec3::new(bad, 0.0, 0.0)));
+            assert!(!is_finite(Vec3::new(0.0, bad, 0.0)));
+            assert!(!is_finite(Vec3::new(0.0, 0.0, bad)));
+        }
+    }
+
+    #[test]
+    fn empty_pixel_has_zero_mean() {
+        assert_eq!(AccumPixel::default().mean(), Vec3::ZERO);
+    }
+}

@@ -57,29 +57,32 @@ pub fn light_cone(light: &SphereLight, p: Vec3) -> LightCone {
     let to_center = light.center - p;
     let d2 = to_center.dot(to_center);
     let r2 = light.radius * light.radius;
-    if !(d2 > r2) {
-        return LightCone {
+    // Written so that a NaN point also gives the empty cone.
+    if d2 > r2 {
+        let dist = d2.sqrt();
+        let sin2_max = r2 / d2;
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        LightCone {
+            axis: to_center / dist,
+            dist,
+            sin2_max,
+            one_minus_cos_max: sin2_max / (1.0 + cos_max),
+        }
+    } else {
+        LightCone {
             axis: Vec3::Z,
             dist: 0.0,
             sin2_max: 0.0,
             one_minus_cos_max: 0.0,
-        };
-    }
-    let dist = d2.sqrt();
-    let sin2_max = r2 / d2;
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    LightCone {
-        axis: to_center / dist,
-        dist,
-        sin2_max,
-        one_minus_cos_max: sin2_max / (1.0 + cos_max),
+        }
     }
 }
 
 impl LightCone {
     /// Whether the point sees no light (it is on or inside the light).
     pub fn is_empty(&self) -> bool {
-        !(self.one_minus_cos_max > 0.0)
+        // light_cone gives 0 for an empty cone and r^2/d^2/(1+cos) > 0 else.
+        self.one_minus_cos_max <= 0.0
     }
 
     /// Solid-angle density of [`LightCone::sample`]: uniform over the cone;
@@ -108,5 +111,74 @@ impl LightCone {
         // Near root of |p + s dir - c| = r: s = d cos - d sqrt(sin2_max - sin2).
         let dist = self.dist * (cos_theta - (self.sin2_max - sin2).max(0.0).sqrt());
         (dir, dist)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ray::Ray;
+    use crate::rng::Rng;
+    use crate::sphere::intersect_sphere;
+
+    #[test]
+    fn one_minus_cos_has_full_precision_for_tiny_lights() {
+        // Case: sin(alpha) = 1e-4: 1 - cos by subtraction loses all digits in f32.
+        let light = SphereLight::new(Vec3::new(0.0, 0.0, -1.0), 1e-4, Vec3::ONE);
+        let cone = light_cone(&light, Vec3::ZERO);
+        let exact = 1.0 - (1.0f64 - 1e-8).sqrt();
+        assert!(((cone.one_minus_cos_max as f64 - exact) / exact).abs() < 1e-5);
+    }
+
+    #[test]
+    fn samples_lie_in_the_cone_and_hit_the_light_at_the_returned_distance() {
+        for (sin_alpha, seed) in [(1e-4f32, 1), (0.01, 2), (0.5, 3), (0.999, 4)] {
+            let d = 3.0;
+            let light = SphereLight::new(Vec3::new(0.4, -2.0, 1.0), d * sin_alpha, Vec3::ONE);
+            let p = light.center + Vec3::new(2.0, 1.0, -2.0).normalize() * d;
+            let cone = light_cone(&light, p);
+            let mut rng = Rng::new(seed, 0, 0, 0, 0);
+            for _ in 0..2000 {
+                let (dir, dist) = cone.sample(rng.next_f32(), rng.next_f32());
+                assert!((dir.length() - 1.0).abs() < 1e-5);
+                let t = intersect_sphere(
+                    light.center,
+                    light.radius,
+                    &Ray { origin: p, dir },
+                    0.0,
+                    f32::MAX,
+                );
+                // Directions at the cone's rim graze the sphere: allow them
+                // to miss by rounding only when sin_alpha is large.
+                if t == f32::MAX {
+                    assert!(
+                        sin_alpha > 0.9,
+                        "sample missed a light of sin(alpha) {sin_alpha}"
+                    );
+                    continue;
+                }
+                assert!(
+                    (t - dist).abs() <= 2e-3 * d,
+                    "sin {sin_alpha}: t {t} vs dist {dist}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn cone_pdf_integrates_to_one_over_its_solid_angle() {
+        // The cone's solid angle is 2 pi (1 - cos); uniform density times it is 1.
+        let light = SphereLight::new(Vec3::ZERO, 0.3, Vec3::ONE);
+        let cone = light_cone(&light, Vec3::new(0.0, 0.0, 2.0));
+        let solid_angle = 2.0 * PI * (1.0 - (1.0f32 - 0.0225).sqrt());
+        assert!((cone.pdf() * solid_angle - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn points_inside_the_light_see_an_empty_cone() {
+        let light = SphereLight::new(Vec3::ZERO, 1.0, Vec3::ONE);
+        assert!(light_cone(&light, Vec3::new(0.5, 0.0, 0.0)).is_empty());
+        assert_eq!(light_cone(&light, Vec3::new(0.5, 0.0, 0.0)).pdf(), 0.0);
+        assert!(!light_cone(&light, Vec3::new(1.5, 0.0, 0.0)).is_empty());
     }
 }

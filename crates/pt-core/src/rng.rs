@@ -61,3 +61,76 @@ impl Rng {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pcg_hash_matches_the_reference_implementation() {
+        // Values of the JCGT 2020 reference code `pcg(v)`, computed by hand
+        // from its definition for v = 0 and v = 1.
+        let reference = |v: u32| {
+            let state = (v as u64 * 747_796_405 + 2_891_336_453) as u32;
+            let word = (((state >> ((state >> 28) + 4)) ^ state) as u64 * 277_803_737) as u32;
+            (word >> 22) ^ word
+        };
+        for v in [0, 1, 2, 12345, u32::MAX] {
+            assert_eq!(pcg_hash(v), reference(v));
+        }
+    }
+
+    #[test]
+    fn floats_are_uniform_in_unit_interval() {
+        // 16 bins, 1.6e5 draws: chi-square with 15 dof; 37.7 is its 0.999 quantile.
+        let mut rng = Rng::new(1, 2, 3, 4, 5);
+        let mut bins = [0u32; 16];
+        let n = 160_000;
+        for _ in 0..n {
+            let u = rng.next_f32();
+            assert!((0.0..1.0).contains(&u));
+            bins[(u * 16.0) as usize] += 1;
+        }
+        let e = n as f64 / 16.0;
+        let chi2: f64 = bins.iter().map(|&b| (b as f64 - e).powi(2) / e).sum();
+        assert!(chi2 < 37.7, "chi2 = {chi2}");
+    }
+
+    #[test]
+    fn neighbouring_pixels_and_frames_are_uncorrelated() {
+        // Correlation of the first draw of (x, y) with (x + 1, y) and with
+        // the next frame, over 1e5 pixels: |r| < 5 / sqrt(n) = 0.016.
+        let n = 100_000u32;
+        for (dx, dframe) in [(1, 0), (0, 1)] {
+            let (mut sa, mut sb, mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for i in 0..n {
+                let (x, y) = (i % 316, i / 316);
+                let a = Rng::new(x, y, 0, 0, 0).next_f32() as f64;
+                let b = Rng::new(x + dx, y, dframe, 0, 0).next_f32() as f64;
+                sa += a;
+                sb += b;
+                sab += a * b;
+                saa += a * a;
+                sbb += b * b;
+            }
+            let nf = n as f64;
+            let cov = sab / nf - sa * sb / nf / nf;
+            let r = cov / ((saa / nf - (sa / nf).powi(2)) * (sbb / nf - (sb / nf).powi(2))).sqrt();
+            assert!(
+                r.abs() < 5.0 / nf.sqrt(),
+                "dx {dx} dframe {dframe}: r = {r}"
+            );
+        }
+    }
+
+    #[test]
+    fn distinct_inputs_give_distinct_streams() {
+        let first = |x, y, f, s, seed| Rng::new(x, y, f, s, seed).next_u32();
+        let base = first(10, 20, 30, 0, 0);
+        assert_ne!(base, first(11, 20, 30, 0, 0));
+        assert_ne!(base, first(10, 21, 30, 0, 0));
+        assert_ne!(base, first(10, 20, 31, 0, 0));
+        assert_ne!(base, first(10, 20, 30, 1, 0));
+        assert_ne!(base, first(10, 20, 30, 0, 1));
+    }
+}

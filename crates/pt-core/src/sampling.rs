@@ -47,3 +47,57 @@ pub fn power_heuristic(pdf_f: f32, pdf_g: f32) -> f32 {
     let g2 = pdf_g * pdf_g;
     if f2 + g2 > 0.0 { f2 / (f2 + g2) } else { 0.0 }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    #[test]
+    fn basis_is_orthonormal_including_near_minus_z() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(1e-7, 0.0, -1.0).normalize(),
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+        ] {
+            let (t, b) = orthonormal_basis(n);
+            for (u, v) in [(t, b), (t, n), (b, n)] {
+                assert!(u.dot(v).abs() < 1e-6, "{n}: not orthogonal");
+            }
+            assert!((t.length() - 1.0).abs() < 1e-6 && (b.length() - 1.0).abs() < 1e-6);
+            assert!((t.cross(b) - n).length() < 1e-6, "{n}: not right-handed");
+        }
+    }
+
+    #[test]
+    fn cosine_samples_have_the_moments_of_cos_over_pi() {
+        // Under p = cos/pi: E[cos] = 2/3, E[cos^2] = 1/2. With 1e5 samples
+        // the standard error of the mean of cos is sqrt(1/2 - 4/9)/sqrt(1e5)
+        // = 7.5e-4; tolerance 5 sigma.
+        let n = Vec3::new(0.2, 0.9, -0.3).normalize();
+        let mut rng = Rng::new(7, 11, 0, 0, 0);
+        let count = 100_000;
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..count {
+            let d = cosine_hemisphere(n, rng.next_f32(), rng.next_f32());
+            let c = n.dot(d) as f64;
+            assert!(c > 0.0, "sample below the hemisphere");
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            s1 += c;
+            s2 += c * c;
+        }
+        let se = ((0.5 - 4.0 / 9.0) / count as f64).sqrt();
+        assert!((s1 / count as f64 - 2.0 / 3.0).abs() < 5.0 * se);
+        assert!((s2 / count as f64 - 0.5).abs() < 5.0 * 2e-3);
+    }
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for (a, b) in [(1.0, 1.0), (3.0, 0.5), (1e7, 0.3), (0.0, 2.0)] {
+            assert!((power_heuristic(a, b) + power_heuristic(b, a) - 1.0).abs() < 1e-6);
+        }
+        assert_eq!(power_heuristic(0.0, 0.0), 0.0);
+    }
+}

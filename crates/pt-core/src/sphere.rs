@@ -82,3 +82,105 @@ pub fn sphere_hit_point(center: Vec3, radius: f32, ray: &Ray, t: f32) -> (Vec3, 
     let normal = if len > 0.0 { to_p / len } else { Vec3::Y };
     (center + normal * radius, normal)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The nearest root > 0 computed in f64, as the exact answer. The
+    /// direction is renormalised in f64: an f32 unit vector is only unit to
+    /// within an ulp, which moves a root 1e4 away by ~1e-5 relative.
+    fn t_f64(center: Vec3, radius: f32, o: Vec3, d: Vec3) -> Option<f64> {
+        let (c, o, d) = (center.as_dvec3(), o.as_dvec3(), d.as_dvec3().normalize());
+        let f = o - c;
+        let b = f.dot(d);
+        let disc = b * b - (f.dot(f) - (radius as f64).powi(2));
+        if disc < 0.0 {
+            return None;
+        }
+        let (t0, t1) = (-b - disc.sqrt(), -b + disc.sqrt());
+        [t0, t1].into_iter().find(|&t| t > 0.0)
+    }
+
+    fn ray(o: Vec3, d: Vec3) -> Ray {
+        Ray {
+            origin: o,
+            dir: d.normalize(),
+        }
+    }
+
+    #[test]
+    fn far_sphere_hit_matches_f64() {
+        // Case: a unit sphere 1e4 away; b^2 - c cancels there in the naive form.
+        let c = Vec3::new(0.0, 0.0, -1.0e4);
+        let r = ray(Vec3::ZERO, Vec3::new(0.0, 0.5e-4, -1.0));
+        let t = intersect_sphere(c, 1.0, &r, 0.0, f32::MAX);
+        let exact = t_f64(c, 1.0, r.origin, r.dir).unwrap();
+        assert!(
+            ((t as f64 - exact) / exact).abs() < 1e-6,
+            "t = {t}, exact {exact}"
+        );
+    }
+
+    #[test]
+    fn tiny_sphere_hit_matches_f64() {
+        // Case: radius 1e-3 at distance 1, hit off-centre.
+        let c = Vec3::new(0.3, -0.2, -1.0);
+        let d = (c + Vec3::new(0.0, 0.7e-3, 0.0)).normalize();
+        let r = ray(Vec3::ZERO, d);
+        let t = intersect_sphere(c, 1e-3, &r, 0.0, f32::MAX);
+        let exact = t_f64(c, 1e-3, r.origin, r.dir).unwrap();
+        assert!(
+            ((t as f64 - exact) / exact).abs() < 1e-6,
+            "t = {t}, exact {exact}"
+        );
+    }
+
+    #[test]
+    fn tangent_rays_hit_inside_and_miss_outside() {
+        // Case: rays passing the centre at radius (1 -+ 1e-4): the first
+        // hits, the second misses, at distance 100 from a sphere of radius 1.
+        let c = Vec3::new(0.0, 0.0, -100.0);
+        let inside = ray(Vec3::new(0.0, 1.0 - 1e-4, 0.0), -Vec3::Z);
+        let outside = ray(Vec3::new(0.0, 1.0 + 1e-4, 0.0), -Vec3::Z);
+        assert!(intersect_sphere(c, 1.0, &inside, 0.0, f32::MAX) < f32::MAX);
+        assert_eq!(intersect_sphere(c, 1.0, &outside, 0.0, f32::MAX), f32::MAX);
+    }
+
+    #[test]
+    fn origin_inside_hits_the_far_side() {
+        // Case: origin at the centre: the only positive root is the radius.
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let r = ray(c, Vec3::new(1.0, 1.0, 0.0));
+        let t = intersect_sphere(c, 0.5, &r, 0.0, f32::MAX);
+        assert!((t - 0.5).abs() < 1e-6, "t = {t}");
+    }
+
+    #[test]
+    fn origin_on_surface_inward_finds_the_chord() {
+        // Case: from a surface point straight through the centre: chord 2r.
+        let c = Vec3::new(0.0, 5.0, 0.0);
+        let r = ray(Vec3::new(0.0, 5.0 + 2.0, 0.0), -Vec3::Y);
+        let t = intersect_sphere(c, 2.0, &r, 1e-4, f32::MAX);
+        assert!((t - 4.0).abs() < 1e-5, "t = {t}");
+    }
+
+    #[test]
+    fn miss_returns_t_max() {
+        let r = ray(Vec3::ZERO, Vec3::X);
+        assert_eq!(
+            intersect_sphere(Vec3::new(0.0, 5.0, 0.0), 1.0, &r, 0.0, 7.0),
+            7.0
+        );
+    }
+
+    #[test]
+    fn hit_point_is_reprojected_onto_the_surface() {
+        let c = Vec3::new(3.0, -2.0, 1.0);
+        let r = ray(Vec3::new(3.0, -2.0, 10.0), -Vec3::Z);
+        let t = intersect_sphere(c, 0.75, &r, 0.0, f32::MAX);
+        let (p, n) = sphere_hit_point(c, 0.75, &r, t);
+        assert!(((p - c).length() - 0.75).abs() < 1e-6);
+        assert!((n - Vec3::Z).length() < 1e-6);
+    }
+}

@@ -58,3 +58,35 @@ fn quantize(v: f32) -> u32 {
     };
     (v * 255.0 + 0.5) as u32
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::TONEMAP_CLAMP;
+
+    #[test]
+    fn srgb_curve_end_points_and_knee() {
+        assert_eq!(srgb_encode(0.0), 0.0);
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        // Both pieces meet at the knee to within 1e-7.
+        let k = 0.003_130_8f32;
+        assert!((12.92 * k - (1.055 * k.powf(1.0 / 2.4) - 0.055)).abs() < 1e-6);
+        assert!((srgb_encode(0.5) - 0.735_356_7).abs() < 1e-5);
+    }
+
+    #[test]
+    fn packing_is_rgba_little_endian_and_rounds() {
+        assert_eq!(pack_rgba8(Vec3::new(1.0, 0.0, 0.5)), 0xff_80_00_ff);
+        assert_eq!(pack_rgba8(Vec3::new(f32::NAN, 2.0, -1.0)), 0xff_00_ff_00);
+    }
+
+    #[test]
+    fn exposure_doubles_per_stop_and_tone_mappers_saturate() {
+        let c = display_color(Vec3::splat(0.25), 1.0, TONEMAP_CLAMP);
+        assert!((c.x - srgb_encode(0.5)).abs() < 1e-6);
+        // 1.055 * 1 - 0.055 is 1 to within one f32 ulp.
+        assert!((display_color(Vec3::splat(1e9), 0.0, TONEMAP_CLAMP) - Vec3::ONE).length() < 1e-6);
+        assert!((display_color(Vec3::splat(1e9), 0.0, TONEMAP_ACES) - Vec3::ONE).length() < 1e-3);
+        assert_eq!(display_color(Vec3::ZERO, 0.0, TONEMAP_ACES), Vec3::ZERO);
+    }
+}

@@ -105,3 +105,94 @@ pub fn intersect_wall(wall: &Wall, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
         t_max
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn floor() -> Wall {
+        Wall::new(
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, -2.0),
+            Vec3::splat(0.5),
+        )
+    }
+
+    #[test]
+    fn derived_fields_are_exact_for_an_axis_aligned_wall() {
+        let w = floor();
+        assert_eq!(w.normal, Vec3::Y);
+        assert_eq!(w.w, Vec3::new(0.0, 0.25, 0.0));
+        assert_eq!(w.area(), 4.0);
+    }
+
+    #[test]
+    fn straight_hit_inside_and_miss_outside() {
+        let w = floor();
+        let down = |x, z| Ray {
+            origin: Vec3::new(x, 1.0, z),
+            dir: -Vec3::Y,
+        };
+        assert_eq!(intersect_wall(&w, &down(0.3, -0.2), 0.0, f32::MAX), 1.0);
+        assert_eq!(
+            intersect_wall(&w, &down(1.01, 0.0), 0.0, f32::MAX),
+            f32::MAX
+        );
+        assert_eq!(
+            intersect_wall(&w, &down(0.0, -1.01), 0.0, f32::MAX),
+            f32::MAX
+        );
+    }
+
+    #[test]
+    fn grazing_hit_lands_on_the_plane() {
+        // Case: a ray 1e-4 rad above the plane direction; t is 1e4 times the
+        // height, so a small error in n.d would move the hit far.
+        let w = floor();
+        let angle = 1e-4f32;
+        let r = Ray {
+            origin: Vec3::new(-0.9, 1e-4, 0.0),
+            dir: Vec3::new(angle.cos(), -angle.sin(), 0.0),
+        };
+        let t = intersect_wall(&w, &r, 0.0, f32::MAX);
+        let exact = 1e-4f64 / (1e-4f64).sin();
+        assert!(
+            ((t as f64 - exact) / exact).abs() < 1e-5,
+            "t = {t}, exact {exact}"
+        );
+        assert!(r.at(t).y.abs() < 1e-7);
+    }
+
+    #[test]
+    fn parallel_ray_misses() {
+        let w = floor();
+        let r = Ray {
+            origin: Vec3::new(0.0, 0.0, 0.0),
+            dir: Vec3::X,
+        };
+        assert_eq!(intersect_wall(&w, &r, 0.0, 5.0), 5.0);
+    }
+
+    #[test]
+    fn a_seam_between_two_walls_is_hit_by_one_of_them() {
+        // Case: a ray aimed exactly at the floor/back-wall edge from inside
+        // the room must not pass between the two walls.
+        let back = Wall::new(
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::ONE,
+        );
+        let f = floor();
+        let o = Vec3::new(0.123, 1.0, 0.456);
+        for i in 0..1000 {
+            let x = -0.999 + 1.998 * (i as f32 / 999.0);
+            let dir = (Vec3::new(x, 0.0, -1.0) - o).normalize();
+            let r = Ray { origin: o, dir };
+            let hit =
+                intersect_wall(&f, &r, 0.0, f32::MAX).min(intersect_wall(&back, &r, 0.0, f32::MAX));
+            assert!(hit < f32::MAX, "ray {i} escaped through the seam");
+        }
+    }
+}

@@ -22,7 +22,7 @@ pub enum Renderer {
     /// GPU backend with its context.
     Gpu(Box<GpuContext>, Box<GpuRenderer>),
     /// CPU backend.
-    Cpu(CpuRenderer),
+    Cpu(Box<CpuRenderer>),
 }
 
 impl Renderer {
@@ -39,7 +39,7 @@ impl Renderer {
                 let r = GpuRenderer::new(&ctx, params, walls, spheres)?;
                 Renderer::Gpu(Box::new(ctx), Box::new(r))
             }
-            Backend::Cpu => Renderer::Cpu(CpuRenderer::new(params, walls, spheres)),
+            Backend::Cpu => Renderer::Cpu(Box::new(CpuRenderer::new(params, walls, spheres))),
         })
     }
 

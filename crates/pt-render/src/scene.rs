@@ -516,7 +516,7 @@ impl Checker<'_> {
             let albedo = self.albedo(&w.albedo, &field("albedo"))?;
             // Zero area: a zero edge, or edges (nearly) parallel.
             let area = edge_u.cross(edge_v).length();
-            if !(area > 1e-6 * edge_u.length() * edge_v.length()) || !area.is_finite() {
+            if area <= 1e-6 * edge_u.length() * edge_v.length() || !area.is_finite() {
                 return self.err(
                     w.edge_v.span(),
                     &field("edge_v"),
@@ -560,5 +560,172 @@ impl Checker<'_> {
             background,
             render,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Scene, SceneError> {
+        Scene::from_toml(text, Path::new("test.toml"))
+    }
+
+    /// The default scene with `from` replaced by `to` (which must occur).
+    fn with(from: &str, to: &str) -> String {
+        assert!(
+            DEFAULT_SCENE_TOML.contains(from),
+            "{from:?} not in the default scene"
+        );
+        DEFAULT_SCENE_TOML.replacen(from, to, 1)
+    }
+
+    fn invalid(text: &str) -> (usize, String, String) {
+        match load(text) {
+            Err(SceneError::Invalid {
+                line,
+                field,
+                message,
+                ..
+            }) => (line, field, message),
+            other => panic!("expected an invalid-value error, got {other:?}"),
+        }
+    }
+
+    fn line_of(text: &str, needle: &str) -> usize {
+        text[..text.find(needle).unwrap()].matches('\n').count() + 1
+    }
+
+    #[test]
+    fn default_scene_has_the_design_numbers() {
+        let s = Scene::default_scene();
+        assert_eq!(s.walls.len(), 5);
+        assert_eq!(s.spheres.len(), 2);
+        assert_eq!(
+            s.light,
+            SphereLight::new(Vec3::new(0.0, 1.7, 0.0), 0.15, Vec3::splat(20.0))
+        );
+        assert_eq!(
+            s.spheres[0].sphere,
+            Sphere::new(Vec3::new(-0.45, 0.40, -0.30), 0.40, Vec3::splat(0.73))
+        );
+        assert_eq!(
+            s.spheres[1].sphere,
+            Sphere::new(
+                Vec3::new(0.50, 0.28, 0.35),
+                0.28,
+                Vec3::new(0.20, 0.40, 0.80)
+            )
+        );
+        assert_eq!(s.camera.position, Vec3::new(0.0, 1.0, 3.4));
+        assert_eq!(s.camera.vfov_degrees, 40.0);
+        assert_eq!(s.render.max_bounces, 5);
+        assert_eq!(s.background, Vec3::ZERO);
+        // Both spheres rest exactly on the floor (y = 0).
+        for sp in &s.spheres {
+            assert_eq!(sp.sphere.center.y - sp.sphere.radius, 0.0);
+        }
+        // Walls span the room x in [-1, 1], y in [0, 2], z in [-1, 1].
+        let area: f32 = s.walls.iter().map(|w| w.wall.area()).sum();
+        assert_eq!(area, 20.0);
+    }
+
+    #[test]
+    fn to_toml_round_trips() {
+        let s = Scene::default_scene();
+        assert_eq!(load(&s.to_toml()).unwrap(), s);
+    }
+
+    #[test]
+    fn negative_radius_names_line_and_field() {
+        let text = with("radius = 0.28", "radius = -0.28");
+        let (line, field, _) = invalid(&text);
+        assert_eq!(field, "spheres[1].radius");
+        assert_eq!(line, line_of(&text, "radius = -0.28"));
+    }
+
+    #[test]
+    fn zero_light_radius_is_rejected() {
+        let (_, field, _) = invalid(&with("radius = 0.15", "radius = 0.0"));
+        assert_eq!(field, "light.radius");
+    }
+
+    #[test]
+    fn degenerate_wall_is_rejected() {
+        // Parallel edges: zero area.
+        let text = with("edge_v = [0.0, 2.0, 0.0]", "edge_v = [4.0, 0.0, 0.0]");
+        let (line, field, message) = invalid(&text);
+        assert_eq!(field, "walls[2].edge_v");
+        assert_eq!(line, line_of(&text, "edge_v = [4.0, 0.0, 0.0]"));
+        assert!(message.contains("zero area"));
+    }
+
+    #[test]
+    fn nan_and_infinity_are_rejected() {
+        let (_, field, _) = invalid(&with(
+            "center = [0.0, 1.7, 0.0]",
+            "center = [nan, 1.7, 0.0]",
+        ));
+        assert_eq!(field, "light.center");
+        let (_, field, _) = invalid(&with(
+            "albedo = [0.20, 0.40, 0.80]",
+            "albedo = [0.20, inf, 0.80]",
+        ));
+        assert_eq!(field, "spheres[1].albedo");
+    }
+
+    #[test]
+    fn albedo_above_one_is_rejected() {
+        let (_, field, _) = invalid(&with(
+            "albedo = [0.65, 0.05, 0.05]",
+            "albedo = [1.65, 0.05, 0.05]",
+        ));
+        assert_eq!(field, "walls[3].albedo");
+    }
+
+    #[test]
+    fn non_positive_image_size_and_spp_are_rejected() {
+        assert_eq!(invalid(&with("width = 512", "width = 0")).1, "render.width");
+        assert_eq!(
+            invalid(&with("height = 512", "height = -3")).1,
+            "render.height"
+        );
+        assert_eq!(invalid(&with("spp = 256", "spp = 0")).1, "render.spp");
+    }
+
+    #[test]
+    fn unknown_field_is_a_syntax_error_with_its_line() {
+        let text = with("radius = 0.40", "radius = 0.40\nradious = 0.5");
+        match load(&text) {
+            Err(SceneError::Syntax { line, message, .. }) => {
+                assert_eq!(line, line_of(&text, "radious"));
+                assert!(message.contains("radious"), "{message}");
+            }
+            other => panic!("expected a syntax error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn broken_toml_is_a_syntax_error_with_its_line() {
+        let text = with("[light]", "[light");
+        match load(&text) {
+            Err(SceneError::Syntax { line, .. }) => assert_eq!(line, line_of(&text, "[light")),
+            other => panic!("expected a syntax error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn camera_up_parallel_to_view_is_rejected() {
+        let (_, field, _) = invalid(&with("up = [0.0, 1.0, 0.0]", "up = [0.0, 0.0, 2.0]"));
+        assert_eq!(field, "camera.up");
+    }
+
+    #[test]
+    fn messages_name_file_line_and_field() {
+        let err = load(&with("radius = 0.28", "radius = -1.0"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("test.toml:"), "{err}");
+        assert!(err.contains("spheres[1].radius"), "{err}");
     }
 }

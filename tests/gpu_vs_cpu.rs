@@ -1,0 +1,135 @@
+//! The GPU kernel and the CPU reference compute the same image, and the GPU
+//! renders the default scene without a single non-finite sample.
+
+use pt_core::params::TONEMAP_ACES;
+use pt_core::tonemap::{display_color, pack_rgba8};
+use pt_render::metrics::{mean_and_stderr, region_means};
+use pt_render::{GpuRenderer, RenderSettings, Scene};
+use pt_tests::{gpu, means, render_cpu, render_gpu};
+
+/// Region-by-region z-test of the GPU against the CPU on the default scene.
+///
+/// Each backend renders 24 independent images (distinct seeds, 16 spp
+/// each) of 64x64 pixels. For each 8x8-pixel region and channel, the 24
+/// region means give a mean and a standard error per backend; the two means
+/// must agree within `Z_MAX` combined standard errors. 64 regions x 3
+/// channels = 192 comparisons; with ~46 degrees of freedom a |t| of 6 has a
+/// two-sided probability of 2e-7 each, 4e-5 for the family: a failure is a
+/// real difference, not bad luck. A 2% bias in one region is ~10 standard
+/// errors at these sample counts, so the test has the power to see it.
+#[test]
+fn gpu_and_cpu_agree_region_by_region() {
+    const Z_MAX: f64 = 6.0;
+    const SEEDS: u32 = 24;
+    let scene = Scene::default_scene();
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        spp: 16,
+        ..scene.render
+    };
+    let ctx = gpu();
+    let mut gpu_regions = Vec::new();
+    let mut cpu_regions = Vec::new();
+    for i in 0..SEEDS {
+        let g = render_gpu(&ctx, &scene, &settings, 4, 1000 + i);
+        let c = render_cpu(&scene, &settings, 4, 2000 + i);
+        gpu_regions.push(region_means(&means(&g), 64, 64, 8));
+        cpu_regions.push(region_means(&means(&c), 64, 64, 8));
+    }
+    let mut worst = 0.0f64;
+    for region in 0..gpu_regions[0].len() {
+        for ch in 0..3 {
+            let g: Vec<f64> = gpu_regions.iter().map(|r| r[region][ch]).collect();
+            let c: Vec<f64> = cpu_regions.iter().map(|r| r[region][ch]).collect();
+            let (mg, sg) = mean_and_stderr(&g);
+            let (mc, sc) = mean_and_stderr(&c);
+            let se = (sg * sg + sc * sc).sqrt();
+            if se == 0.0 {
+                // Both exactly constant (black): must be equal.
+                assert_eq!(mg, mc, "region {region} channel {ch}");
+                continue;
+            }
+            let z = (mg - mc) / se;
+            worst = worst.max(z.abs());
+            assert!(
+                z.abs() < Z_MAX,
+                "region {region} channel {ch}: GPU {mg:.5} vs CPU {mc:.5}, z = {z:.2}"
+            );
+        }
+    }
+    eprintln!("largest |z| over 192 region comparisons: {worst:.2}");
+}
+
+/// The same seed gives the same sample streams on both backends: the images
+/// must be very close (not bit-exact: GPU transcendentals and fused
+/// multiply-adds differ in the last bits, and a path can diverge).
+#[test]
+fn same_seed_gives_nearly_the_same_image() {
+    let scene = Scene::default_scene();
+    let settings = RenderSettings {
+        width: 32,
+        height: 32,
+        spp: 8,
+        ..scene.render
+    };
+    let ctx = gpu();
+    let g = means(&render_gpu(&ctx, &scene, &settings, 8, 7));
+    let c = means(&render_cpu(&scene, &settings, 8, 7));
+    let close = g
+        .iter()
+        .zip(&c)
+        .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-3 * (1.0 + b[k].abs())))
+        .count();
+    // At least 90% of the pixels follow the same paths to 1e-3.
+    assert!(
+        close * 10 >= g.len() * 9,
+        "only {close} of {} pixels match",
+        g.len()
+    );
+}
+
+#[test]
+fn default_scene_on_gpu_has_no_non_finite_samples() {
+    let scene = Scene::default_scene();
+    let settings = RenderSettings {
+        width: 128,
+        height: 128,
+        spp: 64,
+        ..scene.render
+    };
+    let accum = render_gpu(&gpu(), &scene, &settings, 8, 0);
+    let bad: u64 = accum.iter().map(|p| p.non_finite as u64).sum();
+    let good: u64 = accum.iter().map(|p| p.samples as u64).sum();
+    assert_eq!(bad, 0);
+    assert_eq!(good, 128 * 128 * 64);
+}
+
+#[test]
+fn gpu_display_pass_matches_the_cpu_transform() {
+    let scene = Scene::default_scene();
+    let settings = RenderSettings {
+        width: 48,
+        height: 40,
+        spp: 4,
+        ..scene.render
+    };
+    let ctx = gpu();
+    let params = scene.frame_params(&settings, 4, 3);
+    let mut r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
+    r.submit_frame(4);
+    r.submit_display(0.5, TONEMAP_ACES);
+    let shown = r.read_display(&ctx).unwrap();
+    let accum = r.read_accum(&ctx).unwrap();
+    assert_eq!(shown.len(), 48 * 40);
+    for (i, (px, acc)) in shown.iter().zip(&accum).enumerate() {
+        let want = pack_rgba8(display_color(acc.mean(), 0.5, TONEMAP_ACES));
+        for shift in [0, 8, 16, 24] {
+            let (a, b) = ((px >> shift) & 255, (want >> shift) & 255);
+            assert!(
+                a.abs_diff(b) <= 1,
+                "pixel {i}: GPU {px:08x} vs CPU {want:08x}"
+            );
+        }
+    }
+}
