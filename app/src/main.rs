@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_render::metrics;
 use pt_render::output::{self, OutputFormat};
 use pt_render::renderer::render_progressive;
 use pt_render::{Backend, RenderSettings, Renderer, Scene};
@@ -26,6 +27,20 @@ struct Cli {
 enum Command {
     /// Render a scene to a PNG (tone-mapped sRGB) or EXR (linear radiance) file.
     Render(RenderArgs),
+    /// Compare an EXR with a reference EXR: MSE, RMSE, relMSE, MAPE, and region means.
+    Compare(CompareArgs),
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// The image to judge (EXR, linear radiance).
+    image: PathBuf,
+    /// The reference (EXR, linear radiance), of the same size.
+    #[arg(long)]
+    reference: PathBuf,
+    /// Side of the square regions whose means are compared, in pixels.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    block: u32,
 }
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
@@ -97,6 +112,7 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Render(args)) => render(&args),
+        Some(Command::Compare(args)) => compare(&args),
         None => render(&RenderArgs::default()),
     };
     if let Err(e) = result {
@@ -180,5 +196,49 @@ fn render(args: &RenderArgs) -> Result<()> {
     println!("samples per second: {:.3e}", stats.samples_per_second());
     println!("non-finite samples: {}", stats.non_finite);
     println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn compare(args: &CompareArgs) -> Result<()> {
+    let read = |p: &PathBuf| {
+        output::read_exr(p).with_context(|| format!("{}: cannot read the EXR", p.display()))
+    };
+    let (w, h, image) = read(&args.image)?;
+    let (rw, rh, reference) = read(&args.reference)?;
+    if (w, h) != (rw, rh) {
+        anyhow::bail!(
+            "{} is {w}x{h} but the reference {} is {rw}x{rh}",
+            args.image.display(),
+            args.reference.display()
+        );
+    }
+    println!("MSE     {:.6e}", metrics::mse(&image, &reference));
+    println!("RMSE    {:.6e}", metrics::rmse(&image, &reference));
+    println!("relMSE  {:.6e}", metrics::rel_mse(&image, &reference));
+    println!("MAPE    {:.6e}", metrics::mape(&image, &reference));
+    // Region means: bias shows as a region that differs beyond the noise.
+    let a = metrics::region_means(&image, w, h, args.block);
+    let b = metrics::region_means(&reference, w, h, args.block);
+    let mut worst = (0.0f64, 0usize, 0usize);
+    let mut sum_rel = 0.0;
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        for c in 0..3 {
+            let rel = (x[c] - y[c]) / (y[c].abs() + 0.01);
+            sum_rel += rel;
+            if rel.abs() > worst.0.abs() {
+                worst = (rel, i, c);
+            }
+        }
+    }
+    let regions_x = w.div_ceil(args.block) as usize;
+    println!(
+        "regions of {0}x{0}: mean relative difference {1:+.4e}, largest {2:+.4e} (region x {3}, y {4}, channel {5})",
+        args.block,
+        sum_rel / (3 * a.len()) as f64,
+        worst.0,
+        worst.1 % regions_x,
+        worst.1 / regions_x,
+        ["r", "g", "b"][worst.2]
+    );
     Ok(())
 }
