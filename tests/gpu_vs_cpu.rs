@@ -22,12 +22,7 @@ fn gpu_and_cpu_agree_region_by_region() {
     const Z_MAX: f64 = 6.0;
     const SEEDS: u32 = 24;
     let scene = Scene::default_scene();
-    let settings = RenderSettings {
-        width: 64,
-        height: 64,
-        spp: 16,
-        ..scene.render
-    };
+    let settings = RenderSettings { width: 64, height: 64, spp: 16, ..scene.render };
     let ctx = gpu();
     let mut gpu_regions = Vec::new();
     let mut cpu_regions = Vec::new();
@@ -52,10 +47,7 @@ fn gpu_and_cpu_agree_region_by_region() {
             }
             let z = (mg - mc) / se;
             worst = worst.max(z.abs());
-            assert!(
-                z.abs() < Z_MAX,
-                "region {region} channel {ch}: GPU {mg:.5} vs CPU {mc:.5}, z = {z:.2}"
-            );
+            assert!(z.abs() < Z_MAX, "region {region} channel {ch}: GPU {mg:.5} vs CPU {mc:.5}, z = {z:.2}");
         }
     }
     eprintln!("largest |z| over 192 region comparisons: {worst:.2}");
@@ -67,38 +59,28 @@ fn gpu_and_cpu_agree_region_by_region() {
 #[test]
 fn same_seed_gives_nearly_the_same_image() {
     let scene = Scene::default_scene();
-    let settings = RenderSettings {
-        width: 32,
-        height: 32,
-        spp: 8,
-        ..scene.render
-    };
+    let settings = RenderSettings { width: 32, height: 32, spp: 8, ..scene.render };
     let ctx = gpu();
     let g = means(&render_gpu(&ctx, &scene, &settings, 8, 7));
     let c = means(&render_cpu(&scene, &settings, 8, 7));
-    let close = g
-        .iter()
-        .zip(&c)
-        .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-3 * (1.0 + b[k].abs())))
-        .count();
+    let close =
+        g.iter().zip(&c).filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-3 * (1.0 + b[k].abs()))).count();
     // At least 90% of the pixels follow the same paths to 1e-3.
-    assert!(
-        close * 10 >= g.len() * 9,
-        "only {close} of {} pixels match",
-        g.len()
-    );
+    assert!(close * 10 >= g.len() * 9, "only {close} of {} pixels match", g.len());
 }
 
 #[test]
 fn default_scene_on_gpu_has_no_non_finite_samples() {
     let scene = Scene::default_scene();
-    let settings = RenderSettings {
-        width: 128,
-        height: 128,
-        spp: 64,
-        ..scene.render
-    };
-    let accum = render_gpu(&gpu(), &scene, &settings, 8, 0);
+    let settings = RenderSettings { width: 128, height: 128, spp: 64, ..scene.render };
+    let ctx = gpu();
+    let params = scene.frame_params(&settings, 8, 0);
+    let mut r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
+    for _ in 0..8 {
+        r.submit_frame(8);
+    }
+    assert_eq!(r.read_non_finite(&ctx).unwrap(), 0);
+    let accum = r.read_accum(&ctx).unwrap();
     let bad: u64 = accum.iter().map(|p| p.non_finite as u64).sum();
     let good: u64 = accum.iter().map(|p| p.samples as u64).sum();
     assert_eq!(bad, 0);
@@ -108,12 +90,7 @@ fn default_scene_on_gpu_has_no_non_finite_samples() {
 #[test]
 fn gpu_display_pass_matches_the_cpu_transform() {
     let scene = Scene::default_scene();
-    let settings = RenderSettings {
-        width: 48,
-        height: 40,
-        spp: 4,
-        ..scene.render
-    };
+    let settings = RenderSettings { width: 48, height: 40, spp: 4, ..scene.render };
     let ctx = gpu();
     let params = scene.frame_params(&settings, 4, 3);
     let mut r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
@@ -126,10 +103,33 @@ fn gpu_display_pass_matches_the_cpu_transform() {
         let want = pack_rgba8(display_color(acc.mean(), 0.5, TONEMAP_ACES));
         for shift in [0, 8, 16, 24] {
             let (a, b) = ((px >> shift) & 255, (want >> shift) & 255);
-            assert!(
-                a.abs_diff(b) <= 1,
-                "pixel {i}: GPU {px:08x} vs CPU {want:08x}"
-            );
+            assert!(a.abs_diff(b) <= 1, "pixel {i}: GPU {px:08x} vs CPU {want:08x}");
         }
     }
+}
+
+/// Non-finite samples are discarded and counted, never accumulated, on both
+/// backends; the GPU's atomic counter agrees with the per-pixel counts.
+#[test]
+fn non_finite_samples_are_counted_and_discarded() {
+    let scene = Scene::default_scene();
+    let settings = RenderSettings { width: 32, height: 32, spp: 4, ..scene.render };
+    // An infinite light (which the scene loader would reject) makes every
+    // path that reaches it infinite.
+    let mut params = scene.frame_params(&settings, 4, 5);
+    params.light.radiance = pt_core::glam::Vec3::splat(f32::INFINITY);
+    let ctx = gpu();
+    let mut r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
+    r.submit_frame(4);
+    let accum = r.read_accum(&ctx).unwrap();
+    let per_pixel: u64 = accum.iter().map(|p| p.non_finite as u64).sum();
+    assert!(per_pixel > 0, "no path reached the light");
+    assert_eq!(r.read_non_finite(&ctx).unwrap() as u64, per_pixel);
+    assert!(accum.iter().all(|p| p.mean().is_finite()), "a non-finite sample was accumulated");
+    assert_eq!(accum.iter().map(|p| (p.samples + p.non_finite) as u64).sum::<u64>(), 32 * 32 * 4);
+
+    let mut cpu = pt_render::CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
+    cpu.render_frame(4);
+    assert!(cpu.accum().iter().map(|p| p.non_finite).sum::<u32>() > 0);
+    assert!(cpu.accum().iter().all(|p| p.mean().is_finite()));
 }

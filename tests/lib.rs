@@ -7,8 +7,7 @@ use pt_render::{CpuRenderer, GpuContext, GpuRenderer, RenderSettings, Scene};
 /// A GPU context, or a panic that says why: GPU tests never skip silently.
 /// CI installs Mesa's lavapipe, so an adapter is always there.
 pub fn gpu() -> GpuContext {
-    GpuContext::new()
-        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter (lavapipe in CI): {e}"))
+    GpuContext::new().unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter (lavapipe in CI): {e}"))
 }
 
 /// Mean radiance per pixel of an accumulation.
@@ -26,8 +25,7 @@ pub fn render_gpu(
     seed: u32,
 ) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
-    let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres())
-        .expect("GPU renderer");
+    let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).expect("GPU renderer");
     let mut done = 0;
     while done < settings.spp {
         let n = per_frame.min(settings.spp - done);
@@ -39,12 +37,7 @@ pub fn render_gpu(
 }
 
 /// The same on the CPU.
-pub fn render_cpu(
-    scene: &Scene,
-    settings: &RenderSettings,
-    per_frame: u32,
-    seed: u32,
-) -> Vec<AccumPixel> {
+pub fn render_cpu(scene: &Scene, settings: &RenderSettings, per_frame: u32, seed: u32) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
     let mut r = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
     let mut done = 0;

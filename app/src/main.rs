@@ -13,11 +13,7 @@ use pt_render::renderer::render_progressive;
 use pt_render::{Backend, RenderSettings, Renderer, Scene};
 
 #[derive(Parser)]
-#[command(
-    name = "pathtracer",
-    version,
-    about = "A progressive, physically based GPU path tracer"
-)]
+#[command(name = "pathtracer", version, about = "A progressive, physically based GPU path tracer")]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -150,8 +146,9 @@ fn render(args: &RenderArgs) -> Result<()> {
     let params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut renderer = match args.backend {
-        BackendArg::Gpu => Renderer::new(Backend::Gpu, params, &walls, &spheres)
-            .context("cannot start the GPU renderer")?,
+        BackendArg::Gpu => {
+            Renderer::new(Backend::Gpu, params, &walls, &spheres).context("cannot start the GPU renderer")?
+        }
         BackendArg::Cpu => Renderer::new(Backend::Cpu, params, &walls, &spheres)?,
         BackendArg::Auto => Renderer::new(Backend::Gpu, params, &walls, &spheres).or_else(|e| {
             eprintln!("GPU unavailable ({e}); rendering on the CPU");
@@ -171,25 +168,18 @@ fn render(args: &RenderArgs) -> Result<()> {
     );
     bar.enable_steady_tick(Duration::from_millis(200));
     let (accum, stats) =
-        render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| {
-            bar.set_position(done as u64)
-        })
-        .context("rendering failed")?;
+        render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| bar.set_position(done as u64))
+            .context("rendering failed")?;
     bar.finish_and_clear();
 
     match format {
         OutputFormat::Png => {
-            let rgba = renderer
-                .display(args.exposure, tonemap)
-                .context("display pass failed")?;
+            let rgba = renderer.display(args.exposure, tonemap).context("display pass failed")?;
             output::write_png(&args.out, settings.width, settings.height, &rgba)?;
         }
-        OutputFormat::Exr => output::write_exr(
-            &args.out,
-            settings.width,
-            settings.height,
-            &output::mean_radiance(&accum),
-        )?,
+        OutputFormat::Exr => {
+            output::write_exr(&args.out, settings.width, settings.height, &output::mean_radiance(&accum))?
+        }
     }
     println!("adapter: {}", renderer.description());
     println!("time: {:.3} s", stats.elapsed.as_secs_f64());
@@ -200,9 +190,7 @@ fn render(args: &RenderArgs) -> Result<()> {
 }
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    let read = |p: &PathBuf| {
-        output::read_exr(p).with_context(|| format!("{}: cannot read the EXR", p.display()))
-    };
+    let read = |p: &PathBuf| output::read_exr(p).with_context(|| format!("{}: cannot read the EXR", p.display()));
     let (w, h, image) = read(&args.image)?;
     let (rw, rh, reference) = read(&args.reference)?;
     if (w, h) != (rw, rh) {

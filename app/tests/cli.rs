@@ -8,10 +8,7 @@ use std::process::{Command, Output};
 use pt_render::scene::DEFAULT_SCENE_TOML;
 
 fn pathtracer(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pathtracer"))
-        .args(args)
-        .output()
-        .expect("run pathtracer")
+    Command::new(env!("CARGO_BIN_EXE_pathtracer")).args(args).output().expect("run pathtracer")
 }
 
 fn stderr(o: &Output) -> String {
@@ -28,10 +25,7 @@ fn scene_with(dir: &Path, from: &str, to: &str) -> PathBuf {
 
 /// "scene.toml:N:" for the line of the default scene that holds `needle`.
 fn at_line_of(needle: &str) -> String {
-    let line = DEFAULT_SCENE_TOML[..DEFAULT_SCENE_TOML.find(needle).unwrap()]
-        .matches('\n')
-        .count()
-        + 1;
+    let line = DEFAULT_SCENE_TOML[..DEFAULT_SCENE_TOML.find(needle).unwrap()].matches('\n').count() + 1;
     format!("scene.toml:{line}:")
 }
 
@@ -39,17 +33,7 @@ fn at_line_of(needle: &str) -> String {
 /// file (nor a temporary one) was left behind.
 fn assert_fails(dir: &Path, args: &[&str], expected: &[&str]) {
     let out = dir.join("out.png");
-    let mut all = vec![
-        "render",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--spp",
-        "1",
-        "--backend",
-        "cpu",
-    ];
+    let mut all = vec!["render", "--width", "8", "--height", "8", "--spp", "1", "--backend", "cpu"];
     if !args.contains(&"--out") {
         all.extend_from_slice(&["--out", out.to_str().unwrap()]);
     }
@@ -60,11 +44,8 @@ fn assert_fails(dir: &Path, args: &[&str], expected: &[&str]) {
     for e in expected {
         assert!(err.contains(e), "message for {args:?} lacks {e:?}: {err}");
     }
-    let left: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .filter(|n| n != "scene.toml")
-        .collect();
+    let left: Vec<_> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name()).filter(|n| n != "scene.toml").collect();
     assert!(left.is_empty(), "files left behind: {left:?}");
 }
 
@@ -72,11 +53,7 @@ fn assert_fails(dir: &Path, args: &[&str], expected: &[&str]) {
 fn syntax_error_names_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_with(dir.path(), "[light]", "[light");
-    assert_fails(
-        dir.path(),
-        &["--scene", scene.to_str().unwrap()],
-        &[&at_line_of("[light]")],
-    );
+    assert_fails(dir.path(), &["--scene", scene.to_str().unwrap()], &[&at_line_of("[light]")]);
 }
 
 #[test]
@@ -93,56 +70,28 @@ fn negative_radius_names_line_and_field() {
 #[test]
 fn degenerate_wall_names_the_wall() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = scene_with(
-        dir.path(),
-        "edge_u = [2.0, 0.0, 0.0]",
-        "edge_u = [0.0, 0.0, 0.0]",
-    );
-    assert_fails(
-        dir.path(),
-        &["--scene", scene.to_str().unwrap()],
-        &["walls[0].edge_v", "zero area"],
-    );
+    let scene = scene_with(dir.path(), "edge_u = [2.0, 0.0, 0.0]", "edge_u = [0.0, 0.0, 0.0]");
+    assert_fails(dir.path(), &["--scene", scene.to_str().unwrap()], &["walls[0].edge_v", "zero area"]);
 }
 
 #[test]
 fn nan_names_the_field() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = scene_with(
-        dir.path(),
-        "radiance = [20.0, 20.0, 20.0]",
-        "radiance = [20.0, nan, 20.0]",
-    );
-    assert_fails(
-        dir.path(),
-        &["--scene", scene.to_str().unwrap()],
-        &["light.radiance", "finite"],
-    );
+    let scene = scene_with(dir.path(), "radiance = [20.0, 20.0, 20.0]", "radiance = [20.0, nan, 20.0]");
+    assert_fails(dir.path(), &["--scene", scene.to_str().unwrap()], &["light.radiance", "finite"]);
 }
 
 #[test]
 fn unknown_field_is_named() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = scene_with(
-        dir.path(),
-        "vfov_degrees = 40.0",
-        "vfov_degrees = 40.0\nfocal = 3",
-    );
-    assert_fails(
-        dir.path(),
-        &["--scene", scene.to_str().unwrap()],
-        &["scene.toml:", "focal"],
-    );
+    let scene = scene_with(dir.path(), "vfov_degrees = 40.0", "vfov_degrees = 40.0\nfocal = 3");
+    assert_fails(dir.path(), &["--scene", scene.to_str().unwrap()], &["scene.toml:", "focal"]);
 }
 
 #[test]
 fn missing_scene_file_is_named() {
     let dir = tempfile::tempdir().unwrap();
-    assert_fails(
-        dir.path(),
-        &["--scene", "/nonexistent/room.toml"],
-        &["/nonexistent/room.toml"],
-    );
+    assert_fails(dir.path(), &["--scene", "/nonexistent/room.toml"], &["/nonexistent/room.toml"]);
 }
 
 #[test]
@@ -156,17 +105,9 @@ fn non_positive_size_and_spp_are_rejected() {
 #[test]
 fn unwritable_or_unknown_output_is_rejected_before_rendering() {
     let dir = tempfile::tempdir().unwrap();
-    assert_fails(
-        dir.path(),
-        &["--out", "/nonexistent-dir/x.png"],
-        &["/nonexistent-dir/x.png"],
-    );
+    assert_fails(dir.path(), &["--out", "/nonexistent-dir/x.png"], &["/nonexistent-dir/x.png"]);
     let bad = dir.path().join("image.bmp");
-    assert_fails(
-        dir.path(),
-        &["--out", bad.to_str().unwrap()],
-        &["image.bmp", ".png"],
-    );
+    assert_fails(dir.path(), &["--out", bad.to_str().unwrap()], &["image.bmp", ".png"]);
 }
 
 /// Renders an EXR on `backend` and checks its size and a plausible mean.
@@ -194,10 +135,7 @@ fn renders_exr(backend: &str) {
     assert_eq!((w, h), (24, 16));
     // The top-centre pixels look at the light (radiance 20) or the
     // ceiling; every pixel is finite and non-negative, and the image is lit.
-    assert!(
-        px.iter()
-            .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0))
-    );
+    assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
     let mean: f32 = px.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * px.len()) as f32;
     assert!(mean > 0.05 && mean < 5.0, "mean radiance {mean}");
 }
@@ -216,17 +154,7 @@ fn renders_exr_on_gpu() {
 fn renders_png_of_the_requested_size() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("img.png");
-    let o = pathtracer(&[
-        "render",
-        "--width",
-        "20",
-        "--height",
-        "10",
-        "--spp",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = pathtracer(&["render", "--width", "20", "--height", "10", "--spp", "2", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let bytes = std::fs::read(&out).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");

@@ -76,11 +76,7 @@ mod tests {
         let per_frame = 8;
         let frames = (1u32 << 25) / per_frame;
         for _ in 0..frames {
-            p.add(PixelSamples {
-                sum: x * per_frame as f32,
-                valid: per_frame,
-                non_finite: 0,
-            });
+            p.add(PixelSamples { sum: x * per_frame as f32, valid: per_frame, non_finite: 0 });
         }
         assert_eq!(p.samples, 1 << 25);
         let m = p.mean();

@@ -41,13 +41,7 @@ impl Camera {
         let right = forward.cross(up).normalize();
         let true_up = right.cross(forward);
         let tan_half = (vfov_degrees.to_radians() * 0.5).tan();
-        Self {
-            position,
-            forward,
-            right: right * (tan_half * aspect),
-            up: true_up * tan_half,
-            ..Self::default()
-        }
+        Self { position, forward, right: right * (tan_half * aspect), up: true_up * tan_half, ..Self::default() }
     }
 
     /// The primary ray through film point (`fx`, `fy`) in pixels, row 0 at
@@ -56,9 +50,6 @@ impl Camera {
         let sx = 2.0 * fx / width as f32 - 1.0;
         let sy = 1.0 - 2.0 * fy / height as f32;
         let dir = (self.forward + self.right * sx + self.up * sy).normalize();
-        Ray {
-            origin: self.position,
-            dir,
-        }
+        Ray { origin: self.position, dir }
     }
 }

@@ -61,21 +61,13 @@ pub fn closest_hit(
     skip_wall: u32,
     t_max: f32,
 ) -> Hit {
-    let mut hit = Hit {
-        t: t_max,
-        kind: HitKind::Nothing,
-        index: 0,
-    };
+    let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
     let mut i = 0;
     while i < params.wall_count {
         if i != skip_wall {
             let t = intersect_wall(&walls[i as usize], ray, 0.0, hit.t);
             if t < hit.t {
-                hit = Hit {
-                    t,
-                    kind: HitKind::Wall,
-                    index: i,
-                };
+                hit = Hit { t, kind: HitKind::Wall, index: i };
             }
         }
         i += 1;
@@ -85,21 +77,13 @@ pub fn closest_hit(
         let s = spheres[i as usize];
         let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
         if t < hit.t {
-            hit = Hit {
-                t,
-                kind: HitKind::Sphere,
-                index: i,
-            };
+            hit = Hit { t, kind: HitKind::Sphere, index: i };
         }
         i += 1;
     }
     let t = intersect_sphere(params.light.center, params.light.radius, ray, 0.0, hit.t);
     if t < hit.t {
-        hit = Hit {
-            t,
-            kind: HitKind::Light,
-            index: 0,
-        };
+        hit = Hit { t, kind: HitKind::Light, index: 0 };
     }
     hit
 }
@@ -134,13 +118,7 @@ pub fn occluded(
 
 /// Radiance arriving along `ray`: one path sample, unbiased for
 /// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
-pub fn trace_path(
-    mut ray: Ray,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-    rng: &mut Rng,
-) -> Vec3 {
+pub fn trace_path(mut ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut Rng) -> Vec3 {
     let nee = params.flags & FLAG_NEE != 0;
     let mis = params.flags & FLAG_MIS != 0;
     let light = params.light;
@@ -189,21 +167,11 @@ pub fn trace_path(
         } else {
             let s = spheres[hit.index as usize];
             let (p, n) = sphere_hit_point(s.center, s.radius, &ray, hit.t);
-            (
-                p,
-                n,
-                s.albedo,
-                s.center.abs() + Vec3::splat(s.radius),
-                NO_WALL,
-            )
+            (p, n, s.albedo, s.center.abs() + Vec3::splat(s.radius), NO_WALL)
         };
         // Shade the side the ray arrived on: walls are two-sided, and a
         // camera inside a sphere sees its inside.
-        let n = if normal.dot(ray.dir) < 0.0 {
-            normal
-        } else {
-            -normal
-        };
+        let n = if normal.dot(ray.dir) < 0.0 { normal } else { -normal };
         let origin = offset_origin(p, n, magnitude);
 
         // Next-event estimation: one shadow ray toward the light's cone.
@@ -216,11 +184,7 @@ pub fn trace_path(
                 let shadow = Ray { origin, dir };
                 if !occluded(&shadow, params, walls, spheres, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
-                    let weight = if mis {
-                        power_heuristic(cone_pdf, bsdf)
-                    } else {
-                        1.0
-                    };
+                    let weight = if mis { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
                     radiance += throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
                 }
@@ -253,13 +217,7 @@ pub fn trace_path(
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame` camera
 /// rays jittered uniformly in the pixel (a box filter), non-finite results
 /// counted and discarded.
-pub fn render_pixel(
-    x: u32,
-    y: u32,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-) -> PixelSamples {
+pub fn render_pixel(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> PixelSamples {
     let mut out = PixelSamples::default();
     let mut s = 0;
     while s < params.samples_per_frame {

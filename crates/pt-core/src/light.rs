@@ -27,12 +27,7 @@ pub struct SphereLight {
 impl SphereLight {
     /// A light from its centre, radius and emitted radiance.
     pub fn new(center: Vec3, radius: f32, radiance: Vec3) -> Self {
-        Self {
-            center,
-            radius,
-            radiance,
-            _pad: 0.0,
-        }
+        Self { center, radius, radiance, _pad: 0.0 }
     }
 }
 
@@ -62,19 +57,9 @@ pub fn light_cone(light: &SphereLight, p: Vec3) -> LightCone {
         let dist = d2.sqrt();
         let sin2_max = r2 / d2;
         let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-        LightCone {
-            axis: to_center / dist,
-            dist,
-            sin2_max,
-            one_minus_cos_max: sin2_max / (1.0 + cos_max),
-        }
+        LightCone { axis: to_center / dist, dist, sin2_max, one_minus_cos_max: sin2_max / (1.0 + cos_max) }
     } else {
-        LightCone {
-            axis: Vec3::Z,
-            dist: 0.0,
-            sin2_max: 0.0,
-            one_minus_cos_max: 0.0,
-        }
+        LightCone { axis: Vec3::Z, dist: 0.0, sin2_max: 0.0, one_minus_cos_max: 0.0 }
     }
 }
 
@@ -88,11 +73,7 @@ impl LightCone {
     /// Solid-angle density of [`LightCone::sample`]: uniform over the cone;
     /// 0 for an empty cone.
     pub fn pdf(&self) -> f32 {
-        if self.is_empty() {
-            0.0
-        } else {
-            1.0 / (2.0 * PI * self.one_minus_cos_max)
-        }
+        if self.is_empty() { 0.0 } else { 1.0 / (2.0 * PI * self.one_minus_cos_max) }
     }
 
     /// A direction uniform in the cone and the distance along it to the
@@ -141,26 +122,14 @@ mod tests {
             for _ in 0..2000 {
                 let (dir, dist) = cone.sample(rng.next_f32(), rng.next_f32());
                 assert!((dir.length() - 1.0).abs() < 1e-5);
-                let t = intersect_sphere(
-                    light.center,
-                    light.radius,
-                    &Ray { origin: p, dir },
-                    0.0,
-                    f32::MAX,
-                );
+                let t = intersect_sphere(light.center, light.radius, &Ray { origin: p, dir }, 0.0, f32::MAX);
                 // Directions at the cone's rim graze the sphere: allow them
                 // to miss by rounding only when sin_alpha is large.
                 if t == f32::MAX {
-                    assert!(
-                        sin_alpha > 0.9,
-                        "sample missed a light of sin(alpha) {sin_alpha}"
-                    );
+                    assert!(sin_alpha > 0.9, "sample missed a light of sin(alpha) {sin_alpha}");
                     continue;
                 }
-                assert!(
-                    (t - dist).abs() <= 2e-3 * d,
-                    "sin {sin_alpha}: t {t} vs dist {dist}"
-                );
+                assert!((t - dist).abs() <= 2e-3 * d, "sin {sin_alpha}: t {t} vs dist {dist}");
             }
         }
     }

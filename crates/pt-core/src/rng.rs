@@ -40,17 +40,12 @@ impl Rng {
     /// `frame`, for the user's `seed`. Distinct inputs give unrelated streams.
     pub fn new(x: u32, y: u32, frame: u32, sample: u32, seed: u32) -> Self {
         let h = pcg4d(UVec4::new(x, y, frame, sample ^ pcg_hash(seed)));
-        Self {
-            state: h.x ^ h.y.rotate_left(16) ^ h.z ^ h.w.rotate_left(8),
-        }
+        Self { state: h.x ^ h.y.rotate_left(16) ^ h.z ^ h.w.rotate_left(8) }
     }
 
     /// The next 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
-        self.state = self
-            .state
-            .wrapping_mul(747_796_405)
-            .wrapping_add(2_891_336_453);
+        self.state = self.state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
         let s = self.state;
         let word = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277_803_737);
         (word >> 22) ^ word
@@ -116,10 +111,7 @@ mod tests {
             let nf = n as f64;
             let cov = sab / nf - sa * sb / nf / nf;
             let r = cov / ((saa / nf - (sa / nf).powi(2)) * (sbb / nf - (sb / nf).powi(2))).sqrt();
-            assert!(
-                r.abs() < 5.0 / nf.sqrt(),
-                "dx {dx} dframe {dframe}: r = {r}"
-            );
+            assert!(r.abs() < 5.0 / nf.sqrt(), "dx {dx} dframe {dframe}: r = {r}");
         }
     }
 

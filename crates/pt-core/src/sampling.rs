@@ -15,10 +15,7 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
     let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
+    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
 /// A direction about unit `n` with density cos(theta)/pi (Malley's method:
@@ -55,13 +52,9 @@ mod tests {
 
     #[test]
     fn basis_is_orthonormal_including_near_minus_z() {
-        for n in [
-            Vec3::Z,
-            -Vec3::Z,
-            Vec3::X,
-            Vec3::new(1e-7, 0.0, -1.0).normalize(),
-            Vec3::new(0.3, -0.5, 0.8).normalize(),
-        ] {
+        for n in
+            [Vec3::Z, -Vec3::Z, Vec3::X, Vec3::new(1e-7, 0.0, -1.0).normalize(), Vec3::new(0.3, -0.5, 0.8).normalize()]
+        {
             let (t, b) = orthonormal_basis(n);
             for (u, v) in [(t, b), (t, n), (b, n)] {
                 assert!(u.dot(v).abs() < 1e-6, "{n}: not orthogonal");

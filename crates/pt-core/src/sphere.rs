@@ -25,12 +25,7 @@ pub struct Sphere {
 impl Sphere {
     /// A sphere from its centre, radius and albedo.
     pub fn new(center: Vec3, radius: f32, albedo: Vec3) -> Self {
-        Self {
-            center,
-            radius,
-            albedo,
-            _pad: 0.0,
-        }
+        Self { center, radius, albedo, _pad: 0.0 }
     }
 }
 
@@ -103,10 +98,7 @@ mod tests {
     }
 
     fn ray(o: Vec3, d: Vec3) -> Ray {
-        Ray {
-            origin: o,
-            dir: d.normalize(),
-        }
+        Ray { origin: o, dir: d.normalize() }
     }
 
     #[test]
@@ -116,10 +108,7 @@ mod tests {
         let r = ray(Vec3::ZERO, Vec3::new(0.0, 0.5e-4, -1.0));
         let t = intersect_sphere(c, 1.0, &r, 0.0, f32::MAX);
         let exact = t_f64(c, 1.0, r.origin, r.dir).unwrap();
-        assert!(
-            ((t as f64 - exact) / exact).abs() < 1e-6,
-            "t = {t}, exact {exact}"
-        );
+        assert!(((t as f64 - exact) / exact).abs() < 1e-6, "t = {t}, exact {exact}");
     }
 
     #[test]
@@ -130,10 +119,7 @@ mod tests {
         let r = ray(Vec3::ZERO, d);
         let t = intersect_sphere(c, 1e-3, &r, 0.0, f32::MAX);
         let exact = t_f64(c, 1e-3, r.origin, r.dir).unwrap();
-        assert!(
-            ((t as f64 - exact) / exact).abs() < 1e-6,
-            "t = {t}, exact {exact}"
-        );
+        assert!(((t as f64 - exact) / exact).abs() < 1e-6, "t = {t}, exact {exact}");
     }
 
     #[test]
@@ -168,10 +154,7 @@ mod tests {
     #[test]
     fn miss_returns_t_max() {
         let r = ray(Vec3::ZERO, Vec3::X);
-        assert_eq!(
-            intersect_sphere(Vec3::new(0.0, 5.0, 0.0), 1.0, &r, 0.0, 7.0),
-            7.0
-        );
+        assert_eq!(intersect_sphere(Vec3::new(0.0, 5.0, 0.0), 1.0, &r, 0.0, 7.0), 7.0);
     }
 
     #[test]

@@ -56,20 +56,8 @@ impl Wall {
     pub fn new(corner: Vec3, edge_u: Vec3, edge_v: Vec3, albedo: Vec3) -> Self {
         let n = edge_u.cross(edge_v);
         let n2 = n.dot(n);
-        let (normal, w) = if n2 > 0.0 {
-            (n / n2.sqrt(), n / n2)
-        } else {
-            (Vec3::ZERO, Vec3::ZERO)
-        };
-        Self {
-            corner,
-            edge_u,
-            edge_v,
-            normal,
-            w,
-            albedo,
-            ..Self::default()
-        }
+        let (normal, w) = if n2 > 0.0 { (n / n2.sqrt(), n / n2) } else { (Vec3::ZERO, Vec3::ZERO) };
+        Self { corner, edge_u, edge_v, normal, w, albedo, ..Self::default() }
     }
 
     /// Area of the parallelogram.
@@ -99,11 +87,7 @@ pub fn intersect_wall(wall: &Wall, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
     let b = wall.w.dot(wall.edge_u.cross(q));
     let lo = -EDGE_SLACK;
     let hi = 1.0 + EDGE_SLACK;
-    if a >= lo && a <= hi && b >= lo && b <= hi {
-        t
-    } else {
-        t_max
-    }
+    if a >= lo && a <= hi && b >= lo && b <= hi { t } else { t_max }
 }
 
 #[cfg(test)]
@@ -111,12 +95,7 @@ mod tests {
     use super::*;
 
     fn floor() -> Wall {
-        Wall::new(
-            Vec3::new(-1.0, 0.0, 1.0),
-            Vec3::new(2.0, 0.0, 0.0),
-            Vec3::new(0.0, 0.0, -2.0),
-            Vec3::splat(0.5),
-        )
+        Wall::new(Vec3::new(-1.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -2.0), Vec3::splat(0.5))
     }
 
     #[test]
@@ -130,19 +109,10 @@ mod tests {
     #[test]
     fn straight_hit_inside_and_miss_outside() {
         let w = floor();
-        let down = |x, z| Ray {
-            origin: Vec3::new(x, 1.0, z),
-            dir: -Vec3::Y,
-        };
+        let down = |x, z| Ray { origin: Vec3::new(x, 1.0, z), dir: -Vec3::Y };
         assert_eq!(intersect_wall(&w, &down(0.3, -0.2), 0.0, f32::MAX), 1.0);
-        assert_eq!(
-            intersect_wall(&w, &down(1.01, 0.0), 0.0, f32::MAX),
-            f32::MAX
-        );
-        assert_eq!(
-            intersect_wall(&w, &down(0.0, -1.01), 0.0, f32::MAX),
-            f32::MAX
-        );
+        assert_eq!(intersect_wall(&w, &down(1.01, 0.0), 0.0, f32::MAX), f32::MAX);
+        assert_eq!(intersect_wall(&w, &down(0.0, -1.01), 0.0, f32::MAX), f32::MAX);
     }
 
     #[test]
@@ -151,26 +121,17 @@ mod tests {
         // height, so a small error in n.d would move the hit far.
         let w = floor();
         let angle = 1e-4f32;
-        let r = Ray {
-            origin: Vec3::new(-0.9, 1e-4, 0.0),
-            dir: Vec3::new(angle.cos(), -angle.sin(), 0.0),
-        };
+        let r = Ray { origin: Vec3::new(-0.9, 1e-4, 0.0), dir: Vec3::new(angle.cos(), -angle.sin(), 0.0) };
         let t = intersect_wall(&w, &r, 0.0, f32::MAX);
         let exact = 1e-4f64 / (1e-4f64).sin();
-        assert!(
-            ((t as f64 - exact) / exact).abs() < 1e-5,
-            "t = {t}, exact {exact}"
-        );
+        assert!(((t as f64 - exact) / exact).abs() < 1e-5, "t = {t}, exact {exact}");
         assert!(r.at(t).y.abs() < 1e-7);
     }
 
     #[test]
     fn parallel_ray_misses() {
         let w = floor();
-        let r = Ray {
-            origin: Vec3::new(0.0, 0.0, 0.0),
-            dir: Vec3::X,
-        };
+        let r = Ray { origin: Vec3::new(0.0, 0.0, 0.0), dir: Vec3::X };
         assert_eq!(intersect_wall(&w, &r, 0.0, 5.0), 5.0);
     }
 
@@ -178,20 +139,14 @@ mod tests {
     fn a_seam_between_two_walls_is_hit_by_one_of_them() {
         // Case: a ray aimed exactly at the floor/back-wall edge from inside
         // the room must not pass between the two walls.
-        let back = Wall::new(
-            Vec3::new(-1.0, 0.0, -1.0),
-            Vec3::new(2.0, 0.0, 0.0),
-            Vec3::new(0.0, 2.0, 0.0),
-            Vec3::ONE,
-        );
+        let back = Wall::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), Vec3::ONE);
         let f = floor();
         let o = Vec3::new(0.123, 1.0, 0.456);
         for i in 0..1000 {
             let x = -0.999 + 1.998 * (i as f32 / 999.0);
             let dir = (Vec3::new(x, 0.0, -1.0) - o).normalize();
             let r = Ray { origin: o, dir };
-            let hit =
-                intersect_wall(&f, &r, 0.0, f32::MAX).min(intersect_wall(&back, &r, 0.0, f32::MAX));
+            let hit = intersect_wall(&f, &r, 0.0, f32::MAX).min(intersect_wall(&back, &r, 0.0, f32::MAX));
             assert!(hit < f32::MAX, "ray {i} escaped through the seam");
         }
     }

@@ -40,16 +40,11 @@ impl CpuRenderer {
         let params = self.params;
         let (walls, spheres) = (&self.walls[..], &self.spheres[..]);
         let width = params.width as usize;
-        self.accum
-            .par_chunks_mut(width)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, px) in row.iter_mut().enumerate() {
-                    px.add(integrator::render_pixel(
-                        x as u32, y as u32, &params, walls, spheres,
-                    ));
-                }
-            });
+        self.accum.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+            for (x, px) in row.iter_mut().enumerate() {
+                px.add(integrator::render_pixel(x as u32, y as u32, &params, walls, spheres));
+            }
+        });
         self.next_frame += 1;
     }
 
@@ -65,9 +60,6 @@ impl CpuRenderer {
 
     /// The display pass on the CPU: the same transform as the kernel's.
     pub fn display(&self, exposure: f32, tonemap: u32) -> Vec<u32> {
-        self.accum
-            .par_iter()
-            .map(|p| pack_rgba8(display_color(p.mean(), exposure, tonemap)))
-            .collect()
+        self.accum.par_iter().map(|p| pack_rgba8(display_color(p.mean(), exposure, tonemap))).collect()
     }
 }

@@ -33,9 +33,7 @@ pub enum GpuError {
     #[error("GPU error: {0}")]
     Validation(String),
     /// The image does not fit the adapter's buffer limits.
-    #[error(
-        "a {width}x{height} image needs a {bytes}-byte GPU buffer, above this adapter's limit of {limit} bytes"
-    )]
+    #[error("a {width}x{height} image needs a {bytes}-byte GPU buffer, above this adapter's limit of {limit} bytes")]
     TooLarge {
         /// Width asked for.
         width: u32,
@@ -76,17 +74,13 @@ impl GpuContext {
     /// A headless context on the best adapter (discrete, integrated,
     /// virtual, then software such as lavapipe).
     pub fn new() -> Result<Self, GpuError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         Self::with_instance(&instance, None)
     }
 
     /// A context on the best adapter of `instance` that can present to
     /// `surface` when one is given.
-    pub fn with_instance(
-        instance: &wgpu::Instance,
-        surface: Option<&wgpu::Surface<'_>>,
-    ) -> Result<Self, GpuError> {
+    pub fn with_instance(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<Self, GpuError> {
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
         let adapter = adapters
             .into_iter()
@@ -95,8 +89,8 @@ impl GpuContext {
             .ok_or(GpuError::NoAdapter)?;
         let adapter_info = adapter.get_info();
         // Timestamp queries time the kernel where the adapter has them.
-        let required_features = adapter.features()
-            & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+        let required_features =
+            adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("pathtracer"),
             required_features,
@@ -104,10 +98,7 @@ impl GpuContext {
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .map_err(|source| GpuError::RequestDevice {
-            adapter: adapter_info.name.clone(),
-            source,
-        })?;
+        .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name.clone(), source })?;
 
         let failure = Arc::new(Mutex::new(None));
         let lost = failure.clone();
@@ -122,21 +113,13 @@ impl GpuContext {
                 f.get_or_insert(e.to_string());
             }
         }));
-        Ok(Self {
-            device,
-            queue,
-            adapter_info,
-            failure,
-        })
+        Ok(Self { device, queue, adapter_info, failure })
     }
 
     /// "name (backend, driver driver_info)", for reports.
     pub fn adapter_description(&self) -> String {
         let i = &self.adapter_info;
-        format!(
-            "{} ({:?}, {:?}, driver {} {})",
-            i.name, i.backend, i.device_type, i.driver, i.driver_info
-        )
+        format!("{} ({:?}, {:?}, driver {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info)
     }
 
     /// Whether this adapter is a software rasteriser (lavapipe).
@@ -147,18 +130,14 @@ impl GpuContext {
     /// Waits for all submitted work, then reports a lost device or an
     /// uncaptured error that happened meanwhile.
     pub fn wait(&self) -> Result<(), GpuError> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::DeviceLost(e.to_string()))?;
         self.check()
     }
 
     /// Reports a lost device or uncaptured error seen so far.
     pub fn check(&self) -> Result<(), GpuError> {
         match self.failure.lock().ok().and_then(|f| f.clone()) {
-            Some(msg) if msg.contains("Lost") || msg.contains("lost") => {
-                Err(GpuError::DeviceLost(msg))
-            }
+            Some(msg) if msg.contains("Lost") || msg.contains("lost") => Err(GpuError::DeviceLost(msg)),
             Some(msg) => Err(GpuError::Validation(msg)),
             None => Ok(()),
         }
@@ -180,13 +159,8 @@ impl GpuContext {
             let _ = tx.send(r);
         });
         self.wait()?;
-        rx.recv()
-            .map_err(|e| GpuError::DeviceLost(e.to_string()))?
-            .map_err(|e| GpuError::DeviceLost(e.to_string()))?;
-        let bytes = staging
-            .get_mapped_range(..)
-            .map_err(|e| GpuError::Validation(e.to_string()))?
-            .to_vec();
+        rx.recv().map_err(|e| GpuError::DeviceLost(e.to_string()))?.map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Validation(e.to_string()))?.to_vec();
         staging.unmap();
         Ok(bytes)
     }
@@ -215,6 +189,8 @@ pub struct GpuRenderer {
     spheres_buf: wgpu::Buffer,
     accum_buf: wgpu::Buffer,
     display_buf: wgpu::Buffer,
+    /// One u32: non-finite samples discarded since the last reset.
+    non_finite_buf: wgpu::Buffer,
     trace_group: wgpu::BindGroup,
     display_group: wgpu::BindGroup,
     params: FrameParams,
@@ -252,10 +228,7 @@ fn bind_group_layout(
         count: None,
     }];
     entries.extend_from_slice(storage);
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &entries,
-    })
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
 }
 
 fn bind_group(
@@ -263,27 +236,14 @@ fn bind_group(
     layout: &wgpu::BindGroupLayout,
     buffers: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
-    let entries: Vec<_> = buffers
-        .iter()
-        .map(|&(binding, b)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("pt-kernel"),
-        layout,
-        entries: &entries,
-    })
+    let entries: Vec<_> =
+        buffers.iter().map(|&(binding, b)| wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }).collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("pt-kernel"), layout, entries: &entries })
 }
 
 /// A storage buffer holding `data`, at least one element long (wgpu
 /// rejects empty bindings; the kernel reads `count` elements only).
-fn storage_buffer<T: bytemuck::Pod>(
-    device: &wgpu::Device,
-    label: &str,
-    data: &[T],
-) -> wgpu::Buffer {
+fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buffer {
     let one = [T::zeroed()];
     let data = if data.is_empty() { &one[..] } else { data };
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -295,12 +255,7 @@ fn storage_buffer<T: bytemuck::Pod>(
 
 impl GpuRenderer {
     /// A renderer for `params` (size, camera, light, settings) and geometry.
-    pub fn new(
-        ctx: &GpuContext,
-        params: FrameParams,
-        walls: &[Wall],
-        spheres: &[Sphere],
-    ) -> Result<Self, GpuError> {
+    pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
         let device = ctx.device.clone();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = kernel_module(&device);
@@ -311,17 +266,9 @@ impl GpuRenderer {
         let trace_layout = bind_group_layout(
             &device,
             "accumulate",
-            &[
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, false),
-            ],
+            &[storage_entry(1, true), storage_entry(2, true), storage_entry(3, false), storage_entry(5, false)],
         );
-        let display_layout = bind_group_layout(
-            &device,
-            "display",
-            &[storage_entry(3, true), storage_entry(4, false)],
-        );
+        let display_layout = bind_group_layout(&device, "display", &[storage_entry(3, true), storage_entry(4, false)]);
         let pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(entry),
@@ -348,21 +295,19 @@ impl GpuRenderer {
         let walls_buf = storage_buffer(&device, "walls", walls);
         let spheres_buf = storage_buffer(&device, "spheres", spheres);
         let (accum_buf, display_buf) = Self::image_buffers(&device, params.width, params.height)?;
+        let non_finite_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("non-finite count"),
+            size: 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let trace_group = bind_group(
             &device,
             &trace_layout,
-            &[
-                (0, &params_buf),
-                (1, &walls_buf),
-                (2, &spheres_buf),
-                (3, &accum_buf),
-            ],
+            &[(0, &params_buf), (1, &walls_buf), (2, &spheres_buf), (3, &accum_buf), (5, &non_finite_buf)],
         );
-        let display_group = bind_group(
-            &device,
-            &display_layout,
-            &[(0, &params_buf), (3, &accum_buf), (4, &display_buf)],
-        );
+        let display_group =
+            bind_group(&device, &display_layout, &[(0, &params_buf), (3, &accum_buf), (4, &display_buf)]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
@@ -378,6 +323,7 @@ impl GpuRenderer {
             spheres_buf,
             accum_buf,
             display_buf,
+            non_finite_buf,
             trace_group,
             display_group,
             params,
@@ -385,31 +331,18 @@ impl GpuRenderer {
         })
     }
 
-    fn image_buffers(
-        device: &wgpu::Device,
-        width: u32,
-        height: u32,
-    ) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+    fn image_buffers(device: &wgpu::Device, width: u32, height: u32) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
         let pixels = width as u64 * height as u64;
         let bytes = pixels * size_of::<AccumPixel>() as u64;
         let limits = device.limits();
-        let limit = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
+        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         if bytes > limit {
-            return Err(GpuError::TooLarge {
-                width,
-                height,
-                bytes,
-                limit,
-            });
+            return Err(GpuError::TooLarge { width, height, bytes, limit });
         }
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
             size: bytes,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             // New buffers are zeroed by wgpu: an empty accumulation.
             mapped_at_creation: false,
         });
@@ -459,16 +392,13 @@ impl GpuRenderer {
                 (1, &self.walls_buf),
                 (2, &self.spheres_buf),
                 (3, &self.accum_buf),
+                (5, &self.non_finite_buf),
             ],
         );
         self.display_group = bind_group(
             &self.device,
             &self.display_layout,
-            &[
-                (0, &self.params_buf),
-                (3, &self.accum_buf),
-                (4, &self.display_buf),
-            ],
+            &[(0, &self.params_buf), (3, &self.accum_buf), (4, &self.display_buf)],
         );
     }
 
@@ -476,6 +406,7 @@ impl GpuRenderer {
     pub fn reset(&mut self) {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.accum_buf, 0, None);
+        encoder.clear_buffer(&self.non_finite_buf, 0, None);
         self.queue.submit([encoder.finish()]);
         self.next_frame = 0;
     }
@@ -486,32 +417,49 @@ impl GpuRenderer {
     }
 
     fn workgroups(&self) -> (u32, u32) {
-        (
-            self.params.width.div_ceil(WORKGROUP_SIZE),
-            self.params.height.div_ceil(WORKGROUP_SIZE),
-        )
+        (self.params.width.div_ceil(WORKGROUP_SIZE), self.params.height.div_ceil(WORKGROUP_SIZE))
     }
 
     /// Submits one frame of `samples` samples per pixel. Nothing waits: the
     /// queue orders this parameter write before the frame's dispatch.
     pub fn submit_frame(&mut self, samples: u32) {
+        self.submit_frame_timed(samples, None);
+    }
+
+    /// [`GpuRenderer::submit_frame`], with the dispatch timed by `timer`
+    /// when one is given (read it with [`GpuTimer::read_ms`]).
+    pub fn submit_frame_timed(&mut self, samples: u32, timer: Option<&GpuTimer>) {
         self.params.frame = self.next_frame;
         self.params.samples_per_frame = samples;
-        self.queue
-            .write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
+        self.write_params();
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        self.encode_accumulate(&mut encoder);
+        self.encode_accumulate(&mut encoder, timer.map(GpuTimer::pass_writes));
+        if let Some(t) = timer {
+            t.resolve(&mut encoder);
+        }
         self.queue.submit([encoder.finish()]);
         self.next_frame += 1;
     }
 
+    /// Writes the parameters (display settings included) without a frame.
+    pub fn write_params(&self) {
+        self.queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
+    }
+
+    /// The uniform buffer of the parameters.
+    pub fn params_buffer(&self) -> &wgpu::Buffer {
+        &self.params_buf
+    }
+
     /// Records the accumulation dispatch with the parameters last written.
-    pub fn encode_accumulate(&self, encoder: &mut wgpu::CommandEncoder) {
+    pub fn encode_accumulate(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
         let (x, y) = self.workgroups();
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("accumulate"),
-            timestamp_writes: None,
-        });
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
         pass.set_pipeline(&self.accumulate);
         pass.set_bind_group(0, &self.trace_group, &[]);
         pass.dispatch_workgroups(x, y, 1);
@@ -521,10 +469,8 @@ impl GpuRenderer {
     /// buffer) with the parameters last written.
     pub fn encode_display(&self, encoder: &mut wgpu::CommandEncoder) {
         let (x, y) = self.workgroups();
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("display"),
-            timestamp_writes: None,
-        });
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("display"), timestamp_writes: None });
         pass.set_pipeline(&self.display);
         pass.set_bind_group(0, &self.display_group, &[]);
         pass.dispatch_workgroups(x, y, 1);
@@ -534,8 +480,7 @@ impl GpuRenderer {
     pub fn submit_display(&mut self, exposure: f32, tonemap: u32) {
         self.params.exposure = exposure;
         self.params.tonemap = tonemap;
-        self.queue
-            .write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
+        self.queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = self.device.create_command_encoder(&Default::default());
         self.encode_display(&mut encoder);
         self.queue.submit([encoder.finish()]);
@@ -553,9 +498,167 @@ impl GpuRenderer {
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
+    /// Non-finite samples discarded since the last reset (waits for the GPU;
+    /// four bytes cross the bus).
+    pub fn read_non_finite(&self, ctx: &GpuContext) -> Result<u32, GpuError> {
+        let bytes = ctx.read_buffer(&self.non_finite_buf, 4)?;
+        Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]))
+    }
+
     /// Reads the display buffer back (waits for the GPU).
     pub fn read_display(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         let bytes = ctx.read_buffer(&self.display_buf, self.display_buf.size())?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+/// Times one compute pass with GPU timestamp queries, where the adapter has
+/// them.
+pub struct GpuTimer {
+    queries: wgpu::QuerySet,
+    resolve_buf: wgpu::Buffer,
+    read_buf: wgpu::Buffer,
+    /// Nanoseconds per timestamp tick.
+    period_ns: f64,
+}
+
+impl GpuTimer {
+    /// A timer, or `None` when the adapter has no timestamp queries.
+    pub fn new(ctx: &GpuContext) -> Option<Self> {
+        if !ctx.device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            return None;
+        }
+        let queries = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("frame timestamps"),
+            ty: wgpu::QueryType::Timestamp,
+            count: 2,
+        });
+        let resolve_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("timestamps"),
+            size: 16,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("timestamps readback"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Some(Self { queries, resolve_buf, read_buf, period_ns: ctx.queue.get_timestamp_period() as f64 })
+    }
+
+    /// Timestamp writes at the beginning and end of a compute pass.
+    pub fn pass_writes(&self) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        }
+    }
+
+    /// Records the copy of the two timestamps to the readable buffer.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.queries, 0..2, &self.resolve_buf, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve_buf, 0, &self.read_buf, 0, 16);
+    }
+
+    /// Milliseconds between the two timestamps of the last timed pass
+    /// (waits for the GPU).
+    pub fn read_ms(&self, ctx: &GpuContext) -> Result<f64, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.read_buf.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        ctx.wait()?;
+        rx.recv().map_err(|e| GpuError::DeviceLost(e.to_string()))?.map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        let t: [u64; 2] = {
+            let view = self.read_buf.get_mapped_range(..).map_err(|e| GpuError::Validation(e.to_string()))?;
+            bytemuck::pod_read_unaligned(&view[..16])
+        };
+        self.read_buf.unmap();
+        Ok(t[1].saturating_sub(t[0]) as f64 * self.period_ns * 1e-6)
+    }
+}
+
+/// Draws the display buffer onto a render target: the viewer's image.
+pub struct Blit {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl Blit {
+    /// A blit for render targets of `format`. A non-sRGB format shows the
+    /// display buffer's sRGB bytes as they are.
+    pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> Self {
+        let device = &ctx.device;
+        let module = kernel_module(device);
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty,
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("blit"),
+            entries: &[
+                entry(
+                    0,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
+                    },
+                ),
+                entry(
+                    4,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("blit"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("blit"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("blit_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("blit_fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { pipeline, layout }
+    }
+
+    /// The bind group for `renderer`'s current buffers (recreate it after a
+    /// resize).
+    pub fn bind_group(&self, ctx: &GpuContext, renderer: &GpuRenderer) -> wgpu::BindGroup {
+        bind_group(&ctx.device, &self.layout, &[(0, renderer.params_buffer()), (4, renderer.display_buffer())])
+    }
+
+    /// Records the blit into a render pass.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, group: &wgpu::BindGroup) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(0..3, 0..1);
     }
 }

@@ -48,10 +48,7 @@ pub fn region_means(image: &[[f32; 3]], width: u32, height: u32, block: u32) -> 
             counts[r] += 1;
         }
     }
-    sums.iter()
-        .zip(&counts)
-        .map(|(s, &n)| s.map(|v| v / n as f64))
-        .collect()
+    sums.iter().zip(&counts).map(|(s, &n)| s.map(|v| v / n as f64)).collect()
 }
 
 /// Mean and standard error of the mean of independent estimates.

@@ -9,9 +9,7 @@ use pt_core::AccumPixel;
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The extension is neither `.png` nor `.exr`.
-    #[error(
-        "{0}: unsupported output format: use a .png (tone-mapped sRGB) or .exr (linear radiance) file name"
-    )]
+    #[error("{0}: unsupported output format: use a .png (tone-mapped sRGB) or .exr (linear radiance) file name")]
     Format(PathBuf),
     /// The file or its folder cannot be written.
     #[error("{path}: cannot write the output file: {source}")]
@@ -42,12 +40,7 @@ pub enum OutputFormat {
 
 /// The format an output path asks for, by extension.
 pub fn output_format(path: &Path) -> Result<OutputFormat, OutputError> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("png") => Ok(OutputFormat::Png),
         Some("exr") => Ok(OutputFormat::Exr),
         _ => Err(OutputError::Format(path.to_owned())),
@@ -55,10 +48,7 @@ pub fn output_format(path: &Path) -> Result<OutputFormat, OutputError> {
 }
 
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
@@ -67,53 +57,34 @@ fn temp_path(path: &Path) -> PathBuf {
 pub fn check_writable(path: &Path) -> Result<OutputFormat, OutputError> {
     let format = output_format(path)?;
     if path.is_dir() {
-        return Err(OutputError::Io {
-            path: path.to_owned(),
-            source: std::io::Error::other("is a directory"),
-        });
+        return Err(OutputError::Io { path: path.to_owned(), source: std::io::Error::other("is a directory") });
     }
     let probe = temp_path(path);
-    std::fs::write(&probe, b"").map_err(|source| OutputError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    std::fs::write(&probe, b"").map_err(|source| OutputError::Io { path: path.to_owned(), source })?;
     let _ = std::fs::remove_file(&probe);
     Ok(format)
 }
 
 /// Writes `path` atomically: encode into a temporary sibling, then rename.
-fn write_atomic(
-    path: &Path,
-    save: impl FnOnce(&Path) -> Result<(), image::ImageError>,
-) -> Result<(), OutputError> {
+fn write_atomic(path: &Path, save: impl FnOnce(&Path) -> Result<(), image::ImageError>) -> Result<(), OutputError> {
     let tmp = temp_path(path);
     if let Err(source) = save(&tmp) {
         let _ = std::fs::remove_file(&tmp);
         return Err(match source {
-            image::ImageError::IoError(source) => OutputError::Io {
-                path: path.to_owned(),
-                source,
-            },
-            source => OutputError::Encode {
-                path: path.to_owned(),
-                source,
-            },
+            image::ImageError::IoError(source) => OutputError::Io { path: path.to_owned(), source },
+            source => OutputError::Encode { path: path.to_owned(), source },
         });
     }
     std::fs::rename(&tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
-        OutputError::Io {
-            path: path.to_owned(),
-            source,
-        }
+        OutputError::Io { path: path.to_owned(), source }
     })
 }
 
 /// Writes packed RGBA8 display pixels (row 0 at the top) as PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u32]) -> Result<(), OutputError> {
     let bytes: Vec<u8> = bytemuck::cast_slice(rgba).to_vec();
-    let img =
-        image::RgbaImage::from_raw(width, height, bytes).expect("one packed pixel per image pixel");
+    let img = image::RgbaImage::from_raw(width, height, bytes).expect("one packed pixel per image pixel");
     write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::Png))
 }
 
@@ -123,17 +94,10 @@ pub fn mean_radiance(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
 }
 
 /// Writes linear mean radiance (row 0 at the top) as 32-bit float EXR.
-pub fn write_exr(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgb: &[[f32; 3]],
-) -> Result<(), OutputError> {
+pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), OutputError> {
     let data: Vec<f32> = rgb.iter().flatten().copied().collect();
     let img = image::Rgb32FImage::from_raw(width, height, data).expect("one mean per image pixel");
-    write_atomic(path, |p| {
-        img.save_with_format(p, image::ImageFormat::OpenExr)
-    })
+    write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::OpenExr))
 }
 
 /// Reads an EXR's RGB as linear f32, row-major from the top.

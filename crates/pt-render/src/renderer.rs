@@ -27,12 +27,7 @@ pub enum Renderer {
 
 impl Renderer {
     /// A renderer on `backend` with an empty accumulation.
-    pub fn new(
-        backend: Backend,
-        params: FrameParams,
-        walls: &[Wall],
-        spheres: &[Sphere],
-    ) -> Result<Self, GpuError> {
+    pub fn new(backend: Backend, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
         Ok(match backend {
             Backend::Gpu => {
                 let ctx = GpuContext::new()?;

@@ -140,13 +140,7 @@ pub struct CameraDesc {
 impl CameraDesc {
     /// The kernel's camera for a film of `width` x `height` pixels.
     pub fn to_gpu(&self, width: u32, height: u32) -> Camera {
-        Camera::look_at(
-            self.position,
-            self.look_at,
-            self.up,
-            self.vfov_degrees,
-            width as f32 / height as f32,
-        )
+        Camera::look_at(self.position, self.look_at, self.up, self.vfov_degrees, width as f32 / height as f32)
     }
 }
 
@@ -167,13 +161,7 @@ pub struct RenderSettings {
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self {
-            width: 512,
-            height: 512,
-            spp: 256,
-            max_bounces: 5,
-            rr_start: 3,
-        }
+        Self { width: 512, height: 512, spp: 256, max_bounces: 5, rr_start: 3 }
     }
 }
 
@@ -215,16 +203,12 @@ pub struct Scene {
 impl Scene {
     /// The built-in default scene (DESIGN section 3).
     pub fn default_scene() -> Self {
-        Self::from_toml(DEFAULT_SCENE_TOML, Path::new(DEFAULT_SCENE_NAME))
-            .expect("the embedded default scene is valid")
+        Self::from_toml(DEFAULT_SCENE_TOML, Path::new(DEFAULT_SCENE_NAME)).expect("the embedded default scene is valid")
     }
 
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
         Self::from_toml(&text, path)
     }
 
@@ -232,12 +216,7 @@ impl Scene {
     pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
         let file: SceneFile = toml::from_str(text).map_err(|e| {
             let (line, column) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
-            SceneError::Syntax {
-                path: path.to_owned(),
-                line,
-                column,
-                message: e.message().trim().to_owned(),
-            }
+            SceneError::Syntax { path: path.to_owned(), line, column, message: e.message().trim().to_owned() }
         })?;
         Checker { text, path }.scene(file)
     }
@@ -253,12 +232,7 @@ impl Scene {
     }
 
     /// The kernel's parameters for frame 0 of a render with `settings`.
-    pub fn frame_params(
-        &self,
-        settings: &RenderSettings,
-        samples_per_frame: u32,
-        seed: u32,
-    ) -> FrameParams {
+    pub fn frame_params(&self, settings: &RenderSettings, samples_per_frame: u32, seed: u32) -> FrameParams {
         FrameParams {
             camera: self.camera.to_gpu(settings.width, settings.height),
             light: self.light,
@@ -300,13 +274,8 @@ impl Scene {
             r.width, r.height, r.spp, r.max_bounces, r.rr_start
         );
         let l = &self.light;
-        let _ = writeln!(
-            s,
-            "[light]\ncenter = {}\nradius = {:?}\nradiance = {}\n",
-            v(l.center),
-            l.radius,
-            v(l.radiance)
-        );
+        let _ =
+            writeln!(s, "[light]\ncenter = {}\nradius = {:?}\nradiance = {}\n", v(l.center), l.radius, v(l.radiance));
         for w in &self.walls {
             let g = &w.wall;
             let _ = writeln!(
@@ -349,12 +318,7 @@ struct Checker<'a> {
 }
 
 impl Checker<'_> {
-    fn err<T>(
-        &self,
-        span: std::ops::Range<usize>,
-        field: &str,
-        message: impl Into<String>,
-    ) -> Result<T, SceneError> {
+    fn err<T>(&self, span: std::ops::Range<usize>, field: &str, message: impl Into<String>) -> Result<T, SceneError> {
         Err(SceneError::Invalid {
             path: self.path.to_owned(),
             line: line_col(self.text, span.start).0,
@@ -366,11 +330,7 @@ impl Checker<'_> {
     fn finite(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
         let a = *v.get_ref();
         if a.iter().any(|x| !x.is_finite()) {
-            return self.err(
-                v.span(),
-                field,
-                format!("every component must be a finite number, got {a:?}"),
-            );
+            return self.err(v.span(), field, format!("every component must be a finite number, got {a:?}"));
         }
         Ok(Vec3::from_array(a))
     }
@@ -378,14 +338,7 @@ impl Checker<'_> {
     fn albedo(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
         let a = self.finite(v, field)?;
         if a.min_element() < 0.0 || a.max_element() > 1.0 {
-            return self.err(
-                v.span(),
-                field,
-                format!(
-                    "albedo components must lie in [0, 1], got {:?}",
-                    v.get_ref()
-                ),
-            );
+            return self.err(v.span(), field, format!("albedo components must lie in [0, 1], got {:?}", v.get_ref()));
         }
         Ok(a)
     }
@@ -393,11 +346,7 @@ impl Checker<'_> {
     fn radius(&self, r: &Spanned<f32>, field: &str) -> Result<f32, SceneError> {
         let x = *r.get_ref();
         if !x.is_finite() || x <= 0.0 {
-            return self.err(
-                r.span(),
-                field,
-                format!("radius must be a positive finite number, got {x}"),
-            );
+            return self.err(r.span(), field, format!("radius must be a positive finite number, got {x}"));
         }
         Ok(x)
     }
@@ -415,11 +364,7 @@ impl Checker<'_> {
             Some(s) => {
                 let x = *s.get_ref();
                 if x < min || x > max as i64 {
-                    return self.err(
-                        s.span(),
-                        field,
-                        format!("must be an integer in [{min}, {max}], got {x}"),
-                    );
+                    return self.err(s.span(), field, format!("must be an integer in [{min}, {max}], got {x}"));
                 }
                 Ok(x as u32)
             }
@@ -447,27 +392,15 @@ impl Checker<'_> {
         };
         let view = look_at - position;
         if view.length_squared() == 0.0 || !view.length_squared().is_finite() {
-            return self.err(
-                c.look_at.span(),
-                "camera.look_at",
-                "must differ from camera.position",
-            );
+            return self.err(c.look_at.span(), "camera.look_at", "must differ from camera.position");
         }
         if view.normalize().cross(up).length_squared() < 1e-12 {
             let span = c.up.as_ref().map_or(c.look_at.span(), |u| u.span());
-            return self.err(
-                span,
-                "camera.up",
-                "must not be zero or parallel to the viewing direction",
-            );
+            return self.err(span, "camera.up", "must not be zero or parallel to the viewing direction");
         }
         let fov = *c.vfov_degrees.get_ref();
         if !(fov > 0.0 && fov < 180.0) {
-            return self.err(
-                c.vfov_degrees.span(),
-                "camera.vfov_degrees",
-                format!("must lie in (0, 180), got {fov}"),
-            );
+            return self.err(c.vfov_degrees.span(), "camera.vfov_degrees", format!("must lie in (0, 180), got {fov}"));
         }
 
         let d = RenderSettings::default();
@@ -476,30 +409,14 @@ impl Checker<'_> {
             width: self.count(&r.width, "render.width", d.width, 1, MAX_IMAGE_SIDE)?,
             height: self.count(&r.height, "render.height", d.height, 1, MAX_IMAGE_SIDE)?,
             spp: self.count(&r.spp, "render.spp", d.spp, 1, u32::MAX)?,
-            max_bounces: self.count(
-                &r.max_bounces,
-                "render.max_bounces",
-                d.max_bounces,
-                0,
-                MAX_BOUNCES_LIMIT,
-            )?,
-            rr_start: self.count(
-                &r.rr_start,
-                "render.rr_start",
-                d.rr_start,
-                1,
-                MAX_BOUNCES_LIMIT,
-            )?,
+            max_bounces: self.count(&r.max_bounces, "render.max_bounces", d.max_bounces, 0, MAX_BOUNCES_LIMIT)?,
+            rr_start: self.count(&r.rr_start, "render.rr_start", d.rr_start, 1, MAX_BOUNCES_LIMIT)?,
         };
 
         let l = &f.light;
         let radiance = self.finite(&l.radiance, "light.radiance")?;
         if radiance.min_element() < 0.0 {
-            return self.err(
-                l.radiance.span(),
-                "light.radiance",
-                "radiance cannot be negative",
-            );
+            return self.err(l.radiance.span(), "light.radiance", "radiance cannot be negative");
         }
         let light = SphereLight::new(
             self.finite(&l.center, "light.center")?,
@@ -524,10 +441,7 @@ impl Checker<'_> {
                 );
             }
             let wall = Wall::new(corner, edge_u, edge_v, albedo);
-            walls.push(NamedWall {
-                name: w.name.clone().unwrap_or_else(|| format!("wall {}", i + 1)),
-                wall,
-            });
+            walls.push(NamedWall { name: w.name.clone().unwrap_or_else(|| format!("wall {}", i + 1)), wall });
         }
 
         let mut spheres = Vec::with_capacity(f.spheres.len());
@@ -538,22 +452,11 @@ impl Checker<'_> {
                 self.radius(&s.radius, &field("radius"))?,
                 self.albedo(&s.albedo, &field("albedo"))?,
             );
-            spheres.push(NamedSphere {
-                name: s
-                    .name
-                    .clone()
-                    .unwrap_or_else(|| format!("sphere {}", i + 1)),
-                sphere,
-            });
+            spheres.push(NamedSphere { name: s.name.clone().unwrap_or_else(|| format!("sphere {}", i + 1)), sphere });
         }
 
         Ok(Scene {
-            camera: CameraDesc {
-                position,
-                look_at,
-                up,
-                vfov_degrees: fov,
-            },
+            camera: CameraDesc { position, look_at, up, vfov_degrees: fov },
             light,
             walls,
             spheres,
@@ -573,21 +476,13 @@ mod tests {
 
     /// The default scene with `from` replaced by `to` (which must occur).
     fn with(from: &str, to: &str) -> String {
-        assert!(
-            DEFAULT_SCENE_TOML.contains(from),
-            "{from:?} not in the default scene"
-        );
+        assert!(DEFAULT_SCENE_TOML.contains(from), "{from:?} not in the default scene");
         DEFAULT_SCENE_TOML.replacen(from, to, 1)
     }
 
     fn invalid(text: &str) -> (usize, String, String) {
         match load(text) {
-            Err(SceneError::Invalid {
-                line,
-                field,
-                message,
-                ..
-            }) => (line, field, message),
+            Err(SceneError::Invalid { line, field, message, .. }) => (line, field, message),
             other => panic!("expected an invalid-value error, got {other:?}"),
         }
     }
@@ -601,22 +496,9 @@ mod tests {
         let s = Scene::default_scene();
         assert_eq!(s.walls.len(), 5);
         assert_eq!(s.spheres.len(), 2);
-        assert_eq!(
-            s.light,
-            SphereLight::new(Vec3::new(0.0, 1.7, 0.0), 0.15, Vec3::splat(20.0))
-        );
-        assert_eq!(
-            s.spheres[0].sphere,
-            Sphere::new(Vec3::new(-0.45, 0.40, -0.30), 0.40, Vec3::splat(0.73))
-        );
-        assert_eq!(
-            s.spheres[1].sphere,
-            Sphere::new(
-                Vec3::new(0.50, 0.28, 0.35),
-                0.28,
-                Vec3::new(0.20, 0.40, 0.80)
-            )
-        );
+        assert_eq!(s.light, SphereLight::new(Vec3::new(0.0, 1.7, 0.0), 0.15, Vec3::splat(20.0)));
+        assert_eq!(s.spheres[0].sphere, Sphere::new(Vec3::new(-0.45, 0.40, -0.30), 0.40, Vec3::splat(0.73)));
+        assert_eq!(s.spheres[1].sphere, Sphere::new(Vec3::new(0.50, 0.28, 0.35), 0.28, Vec3::new(0.20, 0.40, 0.80)));
         assert_eq!(s.camera.position, Vec3::new(0.0, 1.0, 3.4));
         assert_eq!(s.camera.vfov_degrees, 40.0);
         assert_eq!(s.render.max_bounces, 5);
@@ -662,34 +544,22 @@ mod tests {
 
     #[test]
     fn nan_and_infinity_are_rejected() {
-        let (_, field, _) = invalid(&with(
-            "center = [0.0, 1.7, 0.0]",
-            "center = [nan, 1.7, 0.0]",
-        ));
+        let (_, field, _) = invalid(&with("center = [0.0, 1.7, 0.0]", "center = [nan, 1.7, 0.0]"));
         assert_eq!(field, "light.center");
-        let (_, field, _) = invalid(&with(
-            "albedo = [0.20, 0.40, 0.80]",
-            "albedo = [0.20, inf, 0.80]",
-        ));
+        let (_, field, _) = invalid(&with("albedo = [0.20, 0.40, 0.80]", "albedo = [0.20, inf, 0.80]"));
         assert_eq!(field, "spheres[1].albedo");
     }
 
     #[test]
     fn albedo_above_one_is_rejected() {
-        let (_, field, _) = invalid(&with(
-            "albedo = [0.65, 0.05, 0.05]",
-            "albedo = [1.65, 0.05, 0.05]",
-        ));
+        let (_, field, _) = invalid(&with("albedo = [0.65, 0.05, 0.05]", "albedo = [1.65, 0.05, 0.05]"));
         assert_eq!(field, "walls[3].albedo");
     }
 
     #[test]
     fn non_positive_image_size_and_spp_are_rejected() {
         assert_eq!(invalid(&with("width = 512", "width = 0")).1, "render.width");
-        assert_eq!(
-            invalid(&with("height = 512", "height = -3")).1,
-            "render.height"
-        );
+        assert_eq!(invalid(&with("height = 512", "height = -3")).1, "render.height");
         assert_eq!(invalid(&with("spp = 256", "spp = 0")).1, "render.spp");
     }
 
@@ -722,9 +592,7 @@ mod tests {
 
     #[test]
     fn messages_name_file_line_and_field() {
-        let err = load(&with("radius = 0.28", "radius = -1.0"))
-            .unwrap_err()
-            .to_string();
+        let err = load(&with("radius = 0.28", "radius = -1.0")).unwrap_err().to_string();
         assert!(err.starts_with("test.toml:"), "{err}");
         assert!(err.contains("spheres[1].radius"), "{err}");
     }

@@ -33,11 +33,7 @@ fn member(m: &Module, ty: Handle<Type>, i: usize) -> Handle<Type> {
 fn bound(m: &Module, binding: u32) -> Handle<Type> {
     m.global_variables
         .iter()
-        .find(|(_, g)| {
-            g.binding
-                .as_ref()
-                .is_some_and(|b| b.group == 0 && b.binding == binding)
-        })
+        .find(|(_, g)| g.binding.as_ref().is_some_and(|b| b.group == 0 && b.binding == binding))
         .map(|(_, g)| g.ty)
         .unwrap_or_else(|| panic!("no global at binding {binding}"))
 }
@@ -57,20 +53,7 @@ macro_rules! host_layout {
 }
 
 fn wall_layout() -> (u32, Vec<u32>) {
-    host_layout!(Wall {
-        corner,
-        _pad0,
-        edge_u,
-        _pad1,
-        edge_v,
-        _pad2,
-        normal,
-        _pad3,
-        w,
-        _pad4,
-        albedo,
-        _pad5
-    })
+    host_layout!(Wall { corner, _pad0, edge_u, _pad1, edge_v, _pad2, normal, _pad3, w, _pad4, albedo, _pad5 })
 }
 
 #[test]
@@ -100,26 +83,9 @@ fn frame_params_match_the_uniform_block() {
     );
     assert_eq!(
         layout(&m, member(&m, params, 0)),
-        host_layout!(Camera {
-            position,
-            _pad0,
-            forward,
-            _pad1,
-            right,
-            _pad2,
-            up,
-            _pad3
-        })
+        host_layout!(Camera { position, _pad0, forward, _pad1, right, _pad2, up, _pad3 })
     );
-    assert_eq!(
-        layout(&m, member(&m, params, 1)),
-        host_layout!(SphereLight {
-            center,
-            radius,
-            radiance,
-            _pad
-        })
-    );
+    assert_eq!(layout(&m, member(&m, params, 1)), host_layout!(SphereLight { center, radius, radiance, _pad }));
 }
 
 #[test]
@@ -135,15 +101,7 @@ fn spheres_match_the_storage_array() {
     let m = module();
     let (sphere, stride) = array_element(&m, 2);
     assert_eq!(stride as usize, size_of::<Sphere>());
-    assert_eq!(
-        layout(&m, sphere),
-        host_layout!(Sphere {
-            center,
-            radius,
-            albedo,
-            _pad
-        })
-    );
+    assert_eq!(layout(&m, sphere), host_layout!(Sphere { center, radius, albedo, _pad }));
 }
 
 #[test]
@@ -151,24 +109,13 @@ fn accumulation_pixels_match_the_storage_array() {
     let m = module();
     let (px, stride) = array_element(&m, 3);
     assert_eq!(stride as usize, size_of::<AccumPixel>());
-    assert_eq!(
-        layout(&m, px),
-        host_layout!(AccumPixel {
-            sum,
-            samples,
-            compensation,
-            non_finite
-        })
-    );
+    assert_eq!(layout(&m, px), host_layout!(AccumPixel { sum, samples, compensation, non_finite }));
 }
 
 #[test]
 fn host_layouts_are_the_documented_ones() {
     // Exact numbers, so that a change of layout is a visible decision.
-    assert_eq!(
-        wall_layout(),
-        (96, vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92])
-    );
+    assert_eq!(wall_layout(), (96, vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92]));
     assert_eq!(size_of::<FrameParams>(), 160);
     assert_eq!(size_of::<Camera>(), 64);
     assert_eq!(size_of::<SphereLight>(), 32);

@@ -1,16 +1,18 @@
-//! The path tracer's compute entry points. Each is a thin wrapper: the work
-//! is done by `pt-core` functions that the CPU renderer and tests also call.
+//! The path tracer's GPU entry points. Each is a thin wrapper: the work is
+//! done by `pt-core` functions that the CPU renderer and tests also call.
 //!
-//! Bindings (descriptor set 0), shared by both entry points:
+//! Bindings (descriptor set 0); `pt-render` creates the layouts:
 //! 0 `FrameParams` (uniform), 1 walls, 2 spheres, 3 accumulation buffer,
-//! 4 display buffer (RGBA8 packed in u32). `pt-render` creates the layout.
+//! 4 display buffer (RGBA8 packed in u32), 5 non-finite sample counter.
 #![cfg_attr(target_arch = "spirv", no_std)]
 
-use pt_core::glam::UVec3;
+use pt_core::glam::{UVec3, Vec4};
 use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator, tonemap};
+use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
 
-/// Adds one frame of `samples_per_frame` samples to every pixel's sum.
+/// Adds one frame of `samples_per_frame` samples to every pixel's sum, and
+/// counts the non-finite samples it discarded.
 #[spirv(compute(threads(8, 8)))]
 pub fn accumulate(
     #[spirv(global_invocation_id)] id: UVec3,
@@ -18,12 +20,24 @@ pub fn accumulate(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] walls: &[Wall],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] spheres: &[Sphere],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] accum: &mut [AccumPixel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] non_finite: &mut [u32],
 ) {
     if id.x >= params.width || id.y >= params.height {
         return;
     }
     let samples = integrator::render_pixel(id.x, id.y, params, walls, spheres);
     accum[(id.y * params.width + id.x) as usize].add(samples);
+    // Rare: the atomic costs nothing on clean frames.
+    if samples.non_finite > 0 {
+        // SAFETY: a queue-family-scope (all invocations of this dispatch and later ones) relaxed add on a u32 in a storage buffer;
+        // the counter is only read after the frame completes.
+        unsafe {
+            spirv_std::arch::atomic_i_add::<u32, { Scope::QueueFamily as u32 }, { Semantics::NONE.bits() }>(
+                &mut non_finite[0],
+                samples.non_finite,
+            );
+        }
+    }
 }
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
@@ -40,4 +54,27 @@ pub fn display(
     let i = (id.y * params.width + id.x) as usize;
     let color = tonemap::display_color(accum[i].mean(), params.exposure, params.tonemap);
     out[i] = tonemap::pack_rgba8(color);
+}
+
+/// A triangle that covers the viewport (vertices 0, 1, 2).
+#[spirv(vertex)]
+pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &mut Vec4) {
+    *position = tonemap::fullscreen_triangle(index as u32);
+}
+
+/// Shows the display buffer one pixel per framebuffer pixel (the viewer
+/// traces at the window's size).
+#[spirv(fragment)]
+pub fn blit_fs(
+    #[spirv(frag_coord)] coord: Vec4,
+    #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] display: &[u32],
+    color: &mut Vec4,
+) {
+    let (x, y) = (coord.x as u32, coord.y as u32);
+    *color = if x < params.width && y < params.height {
+        tonemap::unpack_rgba8(display[(y * params.width + x) as usize])
+    } else {
+        Vec4::new(0.0, 0.0, 0.0, 1.0)
+    };
 }
