@@ -1,5 +1,7 @@
 //! `pathtracer`: a progressive, physically based GPU path tracer.
 
+mod viewer;
+
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -21,10 +23,37 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Open the interactive viewer (the default when a display is available).
+    View(ViewArgs),
     /// Render a scene to a PNG (tone-mapped sRGB) or EXR (linear radiance) file.
     Render(RenderArgs),
     /// Compare an EXR with a reference EXR: MSE, RMSE, relMSE, MAPE, and region means.
     Compare(CompareArgs),
+}
+
+#[derive(Args, Clone, Default)]
+struct ViewArgs {
+    /// Scene file (TOML); the built-in default scene when absent.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Window width in pixels.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    /// Window height in pixels.
+    #[arg(long, default_value_t = 768, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: u32,
+    /// Stop tracing at this many samples per pixel (0: never).
+    #[arg(long, default_value_t = 0)]
+    spp: u32,
+    /// Maximum scattering events per path [default: the scene's, else 5].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=64))]
+    max_bounces: Option<u32>,
+    /// Run this many frames, then exit (with --screenshot: the hook for tests).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// Save what the window shows, panel included, as PNG after the last frame.
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -107,14 +136,36 @@ impl Default for RenderArgs {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
+        Some(Command::View(args)) => view(&args),
         Some(Command::Render(args)) => render(&args),
         Some(Command::Compare(args)) => compare(&args),
-        None => render(&RenderArgs::default()),
+        None if viewer::display_available() => view(&ViewArgs { width: 1024, height: 768, ..Default::default() }),
+        None => {
+            eprintln!("no display available: rendering the default scene headless to render.png instead");
+            render(&RenderArgs::default())
+        }
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
+}
+
+fn view(args: &ViewArgs) -> Result<()> {
+    if let Some(shot) = &args.screenshot {
+        output::check_writable(shot)?;
+    }
+    let scene = load_scene(args.scene.as_ref())?;
+    viewer::run(viewer::ViewArgs {
+        scene,
+        scene_path: args.scene.clone(),
+        width: args.width,
+        height: args.height,
+        target_spp: args.spp,
+        max_bounces: args.max_bounces,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+    })
 }
 
 fn load_scene(path: Option<&PathBuf>) -> Result<Scene> {

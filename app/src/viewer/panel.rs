@@ -78,8 +78,9 @@ fn albedo_edit(ui: &mut Ui, label: &str, albedo: &mut Vec3) {
 }
 
 /// Draws the panel; edits `s` in place and records button presses.
-pub fn draw(ctx: &egui::Context, s: &mut ViewSettings, stats: &Stats, paths: &mut Paths, actions: &mut Actions) {
-    egui::SidePanel::left("controls").resizable(true).default_width(300.0).show(ctx, |ui| {
+/// Returns the rectangle left for the image, in points.
+pub fn draw(root: &mut Ui, s: &mut ViewSettings, stats: &Stats, paths: &mut Paths, actions: &mut Actions) -> egui::Rect {
+    egui::Panel::left("controls").resizable(true).default_size(320.0).max_size(480.0).show(root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             statistics(ui, stats);
             ui.separator();
@@ -90,13 +91,14 @@ pub fn draw(ctx: &egui::Context, s: &mut ViewSettings, stats: &Stats, paths: &mu
             output(ui, paths, actions);
         });
     });
+    root.available_rect_before_wrap()
 }
 
 fn statistics(ui: &mut Ui, st: &Stats) {
     ui.heading("Statistics");
     egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
         ui.label("adapter");
-        ui.label(&st.adapter);
+        ui.add(egui::Label::new(&st.adapter).truncate()).on_hover_text(&st.adapter);
         ui.end_row();
         ui.label("frames/s");
         ui.label(format!("{:.1}", st.fps));

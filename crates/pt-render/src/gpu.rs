@@ -54,6 +54,7 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     /// The adapter: name, backend, driver, type.
     pub adapter_info: wgpu::AdapterInfo,
+    adapter: wgpu::Adapter,
     /// Set by the device-lost callback or the uncaptured-error handler.
     failure: Arc<Mutex<Option<String>>>,
 }
@@ -113,7 +114,12 @@ impl GpuContext {
                 f.get_or_insert(e.to_string());
             }
         }));
-        Ok(Self { device, queue, adapter_info, failure })
+        Ok(Self { device, queue, adapter_info, adapter, failure })
+    }
+
+    /// The adapter (surface capabilities are asked of it).
+    pub fn adapter(&self) -> &wgpu::Adapter {
+        &self.adapter
     }
 
     /// "name (backend, driver driver_info)", for reports.

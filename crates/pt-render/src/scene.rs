@@ -221,6 +221,12 @@ impl Scene {
         Checker { text, path }.scene(file)
     }
 
+    /// Checks a scene edited in memory (the viewer's panel) against the
+    /// rules the loader applies to files, by writing and re-reading it.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        Self::from_toml(&self.to_toml(), Path::new("<edited scene>")).map(|_| ())
+    }
+
     /// The kernel's walls.
     pub fn gpu_walls(&self) -> Vec<Wall> {
         self.walls.iter().map(|w| w.wall).collect()

@@ -6,7 +6,7 @@
 //! 4 display buffer (RGBA8 packed in u32), 5 non-finite sample counter.
 #![cfg_attr(target_arch = "spirv", no_std)]
 
-use pt_core::glam::{UVec3, Vec4};
+use pt_core::glam::{UVec3, Vec2, Vec4};
 use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
@@ -56,22 +56,25 @@ pub fn display(
     out[i] = tonemap::pack_rgba8(color);
 }
 
-/// A triangle that covers the viewport (vertices 0, 1, 2).
+/// A triangle that covers the viewport (vertices 0, 1, 2), with `uv` from
+/// (0, 0) at the viewport's top left to (1, 1) at its bottom right.
 #[spirv(vertex)]
-pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &mut Vec4) {
+pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &mut Vec4, uv: &mut Vec2) {
     *position = tonemap::fullscreen_triangle(index as u32);
+    *uv = Vec2::new(position.x + 1.0, 1.0 - position.y) * 0.5;
 }
 
-/// Shows the display buffer one pixel per framebuffer pixel (the viewer
-/// traces at the window's size).
+/// Shows the display buffer in a viewport of exactly its size, one pixel
+/// per framebuffer pixel.
 #[spirv(fragment)]
 pub fn blit_fs(
-    #[spirv(frag_coord)] coord: Vec4,
+    uv: Vec2,
     #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] display: &[u32],
     color: &mut Vec4,
 ) {
-    let (x, y) = (coord.x as u32, coord.y as u32);
+    // uv * size lands on pixel centres (x + 0.5): the floor is the pixel.
+    let (x, y) = ((uv.x * params.width as f32) as u32, (uv.y * params.height as f32) as u32);
     *color = if x < params.width && y < params.height {
         tonemap::unpack_rgba8(display[(y * params.width + x) as usize])
     } else {
