@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test of the workspace. GPU tests need a Vulkan driver: when the
 # machine has none, this installs Mesa's software driver (lavapipe) first, so
-# that the GPU tests run everywhere and never skip.
+# that the GPU tests run everywhere and never skip; likewise Xvfb for the
+# viewer's window test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,6 +12,15 @@ if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1;
     [ "$(id -u)" = 0 ] || sudo="sudo"
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null
+fi
+
+# The viewer's smoke test opens a real window on a virtual X display.
+if ! command -v xvfb-run >/dev/null 2>&1; then
+    echo "no xvfb-run found: installing Xvfb (xvfb, xauth)" >&2
+    sudo=""
+    [ "$(id -u)" = 0 ] || sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq xvfb xauth >/dev/null
 fi
 
 cargo test --release --workspace "$@"

@@ -9,9 +9,9 @@ pub const ORBIT_RADIANS_PER_PIXEL: f32 = 0.005;
 pub const ZOOM_PER_NOTCH: f32 = 0.9;
 /// Flying speed in scene units per second (the default room is 2 wide).
 pub const FLY_SPEED: f32 = 1.0;
-/// Closest approach of a zoom to the look-at point, as a fraction of the
-/// distance before it: zoom never reaches or passes the target.
-const MIN_DISTANCE: f32 = 1e-3;
+/// Closest approach of a zoom to the look-at point, in scene units: zoom
+/// never reaches or passes the target, and the view direction stays exact.
+const MIN_DISTANCE: f32 = 1e-4;
 /// Largest elevation angle: the view never flips over the pole.
 const MAX_PITCH: f32 = 1.55;
 
@@ -34,8 +34,9 @@ pub fn orbit(cam: &CameraDesc, yaw: f32, pitch: f32) -> CameraDesc {
 /// never reached.
 pub fn zoom(cam: &CameraDesc, notches: f32) -> CameraDesc {
     let offset = cam.position - cam.look_at;
-    let factor = ZOOM_PER_NOTCH.powf(notches).max(MIN_DISTANCE);
-    CameraDesc { position: cam.look_at + offset * factor, ..*cam }
+    let dist = offset.length();
+    let new_dist = (dist * ZOOM_PER_NOTCH.powf(notches)).max(MIN_DISTANCE.min(dist));
+    CameraDesc { position: cam.look_at + offset * (new_dist / dist), ..*cam }
 }
 
 /// Translates camera and look-at point along the view axes: `forward`

@@ -205,8 +205,12 @@ impl Viewer {
         let (w, h) = (size.width.max(1), size.height.max(1));
         let mut settings = ViewSettings::new(scene, w, h);
         settings.target_spp = args.target_spp;
-        let renderer =
-            GpuRenderer::new(&ctx, settings.frame_params(), &settings.scene.gpu_walls(), &settings.scene.gpu_spheres())?;
+        let renderer = GpuRenderer::new(
+            &ctx,
+            settings.frame_params(),
+            &settings.scene.gpu_walls(),
+            &settings.scene.gpu_spheres(),
+        )?;
         let blit = Blit::new(&ctx, config.format);
         let blit_group = blit.bind_group(&ctx, &renderer);
         let timer = GpuTimer::new(&ctx);
@@ -342,8 +346,8 @@ impl Viewer {
         let reset = force_reset || invalidates_accumulation(&self.applied, &self.settings);
         let mut params = self.settings.frame_params();
         params.frame = self.renderer.params().frame;
-        let geometry_changed =
-            self.settings.scene.walls != self.applied.scene.walls || self.settings.scene.spheres != self.applied.scene.spheres;
+        let geometry_changed = self.settings.scene.walls != self.applied.scene.walls
+            || self.settings.scene.spheres != self.applied.scene.spheres;
         self.renderer.set_params(params)?;
         if geometry_changed {
             self.renderer.set_geometry(&self.settings.scene.gpu_walls(), &self.settings.scene.gpu_spheres());
@@ -437,7 +441,7 @@ impl Viewer {
         }
         // Four bytes, only every 16th frame: the NaN count stays current
         // without a per-frame readback of anything sizeable.
-        if self.frames_drawn % 16 == 0 || !self.tracing() {
+        if self.frames_drawn.is_multiple_of(16) || !self.tracing() {
             self.stats.non_finite = self.renderer.read_non_finite(&self.ctx)? as u64;
         }
         self.display_dirty = true;
@@ -479,7 +483,8 @@ impl Viewer {
         });
         // The image fills the window right of the panel, in physical pixels.
         let ppp = full_output.pixels_per_point;
-        let (x0, y0) = ((image_rect.min.x * ppp).round().max(0.0) as u32, (image_rect.min.y * ppp).round().max(0.0) as u32);
+        let (x0, y0) =
+            ((image_rect.min.x * ppp).round().max(0.0) as u32, (image_rect.min.y * ppp).round().max(0.0) as u32);
         let width = self.config.width.saturating_sub(x0).max(1);
         let height = self.config.height.saturating_sub(y0).max(1);
         self.image_origin = (x0.min(self.config.width - 1), y0.min(self.config.height - 1));
@@ -521,7 +526,8 @@ impl Viewer {
                 return Ok(());
             }
             wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface = self.instance.create_surface(self.window.clone()).context("cannot recreate the surface")?;
+                self.surface =
+                    self.instance.create_surface(self.window.clone()).context("cannot recreate the surface")?;
                 self.surface.configure(&self.ctx.device, &self.config);
                 return Ok(());
             }
@@ -569,7 +575,10 @@ impl Viewer {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 ..Default::default()
             })

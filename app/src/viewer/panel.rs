@@ -79,7 +79,13 @@ fn albedo_edit(ui: &mut Ui, label: &str, albedo: &mut Vec3) {
 
 /// Draws the panel; edits `s` in place and records button presses.
 /// Returns the rectangle left for the image, in points.
-pub fn draw(root: &mut Ui, s: &mut ViewSettings, stats: &Stats, paths: &mut Paths, actions: &mut Actions) -> egui::Rect {
+pub fn draw(
+    root: &mut Ui,
+    s: &mut ViewSettings,
+    stats: &Stats,
+    paths: &mut Paths,
+    actions: &mut Actions,
+) -> egui::Rect {
     egui::Panel::left("controls").resizable(true).default_size(320.0).max_size(480.0).show(root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             statistics(ui, stats);

@@ -85,7 +85,13 @@ impl ViewSettings {
     /// The kernel's parameters for these settings (frame and samples per
     /// frame are set per dispatch).
     pub fn frame_params(&self) -> FrameParams {
-        let render = RenderSettings { width: self.width, height: self.height, max_bounces: self.max_bounces, rr_start: self.rr_start, spp: 1 };
+        let render = RenderSettings {
+            width: self.width,
+            height: self.height,
+            max_bounces: self.max_bounces,
+            rr_start: self.rr_start,
+            spp: 1,
+        };
         let mut p = self.scene.frame_params(&render, 1, 0);
         p.flags = self.flags;
         p.exposure = self.exposure;
