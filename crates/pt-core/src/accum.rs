@@ -33,13 +33,27 @@ pub struct AccumPixel {
     pub non_finite: u32,
 }
 
+/// Adds `x` to the compensated sum (`sum`, `compensation`): Kahan's
+/// summation.
+///
+/// `keep` must be true, from a value the shader compiler cannot know (a
+/// uniform). SPIR-V arithmetic without the NoContraction decoration may be
+/// reassociated by the driver (Mesa's NIR does, in lavapipe), which folds
+/// `(t - sum) - y` to zero and silently turns Kahan's sum into a plain one.
+/// Passing `t` through a select on `keep` hides that `t == sum + y` (the
+/// "select trick" from the WebGPU precise-math discussion, gpuweb#2080).
+pub fn kahan_add(sum: &mut Vec3, compensation: &mut Vec3, x: Vec3, keep: bool) {
+    let y = x - *compensation;
+    let t = *sum + y;
+    let t = if keep { t } else { Vec3::ZERO };
+    *compensation = (t - *sum) - y;
+    *sum = t;
+}
+
 impl AccumPixel {
-    /// Adds one frame's samples.
-    pub fn add(&mut self, s: PixelSamples) {
-        let y = s.sum - self.compensation;
-        let t = self.sum + y;
-        self.compensation = (t - self.sum) - y;
-        self.sum = t;
+    /// Adds one frame's samples. `keep` is true (see [`kahan_add`]).
+    pub fn add(&mut self, s: PixelSamples, keep: bool) {
+        kahan_add(&mut self.sum, &mut self.compensation, s.sum, keep);
         self.samples += s.valid;
         self.non_finite += s.non_finite;
     }
@@ -76,7 +90,7 @@ mod tests {
         let per_frame = 8;
         let frames = (1u32 << 25) / per_frame;
         for _ in 0..frames {
-            p.add(PixelSamples { sum: x * per_frame as f32, valid: per_frame, non_finite: 0 });
+            p.add(PixelSamples { sum: x * per_frame as f32, valid: per_frame, non_finite: 0 }, true);
         }
         assert_eq!(p.samples, 1 << 25);
         let m = p.mean();

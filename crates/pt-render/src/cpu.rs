@@ -42,7 +42,7 @@ impl CpuRenderer {
         let width = params.width as usize;
         self.accum.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
-                px.add(integrator::render_pixel(x as u32, y as u32, &params, walls, spheres));
+                px.add(integrator::render_pixel(x as u32, y as u32, &params, walls, spheres), true);
             }
         });
         self.next_frame += 1;

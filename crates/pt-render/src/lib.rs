@@ -1,6 +1,7 @@
 //! Host side of the path tracer: scene files, the wgpu renderer, the CPU
 //! renderer, image output and error metrics.
 
+pub mod accuracy;
 pub mod cpu;
 pub mod gpu;
 pub mod metrics;
@@ -12,3 +13,4 @@ pub use cpu::CpuRenderer;
 pub use gpu::{GpuContext, GpuError, GpuRenderer, KERNEL_SPV};
 pub use renderer::{Backend, Renderer};
 pub use scene::{RenderSettings, Scene, SceneError};
+pub mod stats;

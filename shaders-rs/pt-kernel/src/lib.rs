@@ -26,7 +26,8 @@ pub fn accumulate(
         return;
     }
     let samples = integrator::render_pixel(id.x, id.y, params, walls, spheres);
-    accum[(id.y * params.width + id.x) as usize].add(samples);
+    // width != 0 always; the driver cannot know it (see `kahan_add`).
+    accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
     if samples.non_finite > 0 {
         // SAFETY: a queue-family-scope (all invocations of this dispatch and later ones) relaxed add on a u32 in a storage buffer;

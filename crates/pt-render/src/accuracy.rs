@@ -1,0 +1,997 @@
+//! The accuracy suite: analytic scenes, hard numerical cases and sampling
+//! tests, each with an expected value, a measurement, its standard error
+//! and a tolerance derived from it (`pathtracer accuracy`).
+//!
+//! Monte Carlo cases render `SEEDS` independent images (distinct seeds);
+//! the spread of their means gives the standard error, and the tolerance is
+//! `Z_CRIT` standard errors. With 16 seeds the t statistic has 15 degrees
+//! of freedom, for which |t| > 5.5 has probability 1e-4: over the ~60 cases
+//! of a run a false failure has probability under 1%. Exact cases
+//! (geometry, accumulation) have tolerances from f32 rounding, stated per
+//! case.
+
+use std::f64::consts::PI;
+
+use pt_core::glam::{DVec3, Vec3};
+use pt_core::params::{FLAG_NEE, FLAGS_DEFAULT};
+use pt_core::ray::offset_origin;
+use pt_core::rng::Rng;
+use pt_core::sampling::cosine_hemisphere;
+use pt_core::sphere::{intersect_sphere, sphere_hit_point};
+use pt_core::wall::intersect_wall;
+use pt_core::{AccumPixel, FrameParams, Ray, Sphere, SphereLight, Wall, integrator, light};
+use rayon::prelude::*;
+
+use crate::CpuRenderer;
+use crate::gpu::{GpuContext, GpuError, GpuRenderer};
+use crate::metrics::{mean_and_stderr, region_means};
+use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
+use crate::stats::{SphereBins, chi2_test};
+
+/// Independent renders per Monte Carlo case.
+pub const SEEDS: u32 = 16;
+/// Tolerance of Monte Carlo cases in standard errors (t, 15 dof: p = 1e-4).
+pub const Z_CRIT: f64 = 5.5;
+/// Family-wise significance of the sampling tests (Sidak-corrected).
+pub const SAMPLING_ALPHA: f64 = 0.01;
+
+/// One line of the report.
+#[derive(Clone, Debug)]
+pub struct CaseResult {
+    /// What is checked.
+    pub case: String,
+    /// "cpu", "gpu", or "core" for backend-independent checks.
+    pub backend: &'static str,
+    /// The exact (or reference) value.
+    pub expected: f64,
+    /// The measured value.
+    pub measured: f64,
+    /// Standard error of the measurement (0 for exact checks).
+    pub stderr: f64,
+    /// Largest accepted |measured - expected|.
+    pub tolerance: f64,
+    /// Non-finite samples seen while measuring.
+    pub non_finite: u64,
+    /// Within tolerance and no non-finite sample.
+    pub pass: bool,
+}
+
+impl CaseResult {
+    fn new(
+        case: impl Into<String>,
+        backend: &'static str,
+        expected: f64,
+        measured: f64,
+        stderr: f64,
+        tolerance: f64,
+        non_finite: u64,
+    ) -> Self {
+        let pass = (measured - expected).abs() <= tolerance && non_finite == 0 && measured.is_finite();
+        Self { case: case.into(), backend, expected, measured, stderr, tolerance, non_finite, pass }
+    }
+
+    fn monte_carlo(case: impl Into<String>, backend: &'static str, expected: f64, m: &Measurement) -> Self {
+        // A floor of f32 resolution for cases whose noise is zero.
+        let tol = (Z_CRIT * m.stderr).max(1e-6 * expected.abs());
+        Self::new(case, backend, expected, m.mean, m.stderr, tol, m.non_finite)
+    }
+}
+
+/// How big the suite runs.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Size {
+    /// For CI: fewer rays in the counting checks, smaller images.
+    Quick,
+    /// The full counts the issue asks for (1e6 hit points, 1e7 rays).
+    Full,
+}
+
+/// The backend a case renders on.
+pub enum Target<'a> {
+    /// The CPU renderer.
+    Cpu,
+    /// The GPU renderer on this context.
+    Gpu(&'a GpuContext),
+}
+
+impl Target<'_> {
+    fn name(&self) -> &'static str {
+        match self {
+            Target::Cpu => "cpu",
+            Target::Gpu(_) => "gpu",
+        }
+    }
+
+    /// Renders `spp` samples per pixel with `params` and returns the
+    /// accumulation.
+    fn render(
+        &self,
+        params: FrameParams,
+        walls: &[Wall],
+        spheres: &[Sphere],
+        spp: u32,
+        per_frame: u32,
+    ) -> Result<Vec<AccumPixel>, GpuError> {
+        let mut done = 0;
+        match self {
+            Target::Cpu => {
+                let mut r = CpuRenderer::new(params, walls, spheres);
+                while done < spp {
+                    let n = per_frame.min(spp - done);
+                    r.render_frame(n);
+                    done += n;
+                }
+                Ok(r.accum().to_vec())
+            }
+            Target::Gpu(ctx) => {
+                let mut r = GpuRenderer::new(ctx, params, walls, spheres)?;
+                while done < spp {
+                    let n = per_frame.min(spp - done);
+                    r.submit_frame(n);
+                    done += n;
+                }
+                ctx.wait()?;
+                r.read_accum(ctx)
+            }
+        }
+    }
+}
+
+/// Mean over seeds of a per-image statistic, with its standard error.
+#[derive(Clone, Debug, Default)]
+pub struct Measurement {
+    /// Mean over seeds.
+    pub mean: f64,
+    /// Standard error of the mean.
+    pub stderr: f64,
+    /// Non-finite samples over all seeds.
+    pub non_finite: u64,
+}
+
+/// Mean radiance per pixel, row-major.
+type Image = Vec<[f32; 3]>;
+
+/// A change to a test setup.
+type Variant = (&'static str, fn(&mut Setup));
+
+/// A scene with everything the kernel needs, built in code.
+struct Setup {
+    scene: Scene,
+    settings: RenderSettings,
+    flags: u32,
+}
+
+impl Setup {
+    fn new(scene: Scene, width: u32, height: u32, spp: u32, max_bounces: u32) -> Self {
+        let settings = RenderSettings { width, height, spp, max_bounces, rr_start: 3 };
+        Self { scene, settings, flags: FLAGS_DEFAULT }
+    }
+
+    fn params(&self, seed: u32) -> FrameParams {
+        let mut p = self.scene.frame_params(&self.settings, 1, seed);
+        p.flags = self.flags;
+        p
+    }
+
+    /// Per-seed images (mean radiance per pixel) and the non-finite count.
+    fn images(&self, t: &Target, seeds: std::ops::Range<u32>) -> Result<(Vec<Image>, u64), GpuError> {
+        let mut images = Vec::new();
+        let mut bad = 0;
+        for seed in seeds {
+            let accum =
+                t.render(self.params(seed), &self.scene.gpu_walls(), &self.scene.gpu_spheres(), self.settings.spp, 16)?;
+            bad += accum.iter().map(|p| p.non_finite as u64).sum::<u64>();
+            images.push(accum.iter().map(|p| p.mean().to_array()).collect());
+        }
+        Ok((images, bad))
+    }
+
+    /// Mean of channel-averaged radiance over all pixels, across seeds.
+    fn measure(&self, t: &Target) -> Result<Measurement, GpuError> {
+        let (images, non_finite) = self.images(t, 0..SEEDS)?;
+        let per_seed: Vec<f64> = images
+            .iter()
+            .map(|img| img.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / img.len() as f64)
+            .collect();
+        let (mean, stderr) = mean_and_stderr(&per_seed);
+        Ok(Measurement { mean, stderr, non_finite })
+    }
+}
+
+fn wall(corner: Vec3, u: Vec3, v: Vec3, albedo: f32) -> NamedWall {
+    NamedWall { name: "wall".into(), wall: Wall::new(corner, u, v, Vec3::splat(albedo)) }
+}
+
+fn sphere(center: Vec3, radius: f32, albedo: f32) -> NamedSphere {
+    NamedSphere { name: "sphere".into(), sphere: Sphere::new(center, radius, Vec3::splat(albedo)) }
+}
+
+fn camera(position: Vec3, look_at: Vec3, vfov_degrees: f32) -> CameraDesc {
+    let dir = (look_at - position).normalize();
+    let up = if dir.y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
+    CameraDesc { position, look_at, up, vfov_degrees }
+}
+
+fn empty_scene(cam: CameraDesc) -> Scene {
+    Scene {
+        camera: cam,
+        light: SphereLight::new(Vec3::new(0.0, -1e4, 0.0), 1.0, Vec3::ZERO),
+        walls: vec![],
+        spheres: vec![],
+        background: Vec3::ZERO,
+        render: RenderSettings::default(),
+    }
+}
+
+/// Radiance of the wall of a diffuse spherical room of albedo `rho` lit by
+/// a spherical light of radiance `l` at its centre, s = r / R, for at most
+/// `bounces` scattering events: rho L s^2 sum_{k<bounces} (rho (1 - s^2))^k.
+pub fn sphere_room_radiance(rho: f64, l: f64, s: f64, bounces: u32) -> f64 {
+    let q = rho * (1.0 - s * s);
+    let geometric = if bounces >= 10_000 { 1.0 / (1.0 - q) } else { (1.0 - q.powi(bounces as i32)) / (1.0 - q) };
+    rho * l * s * s * if q == 0.0 { 1.0 } else { geometric }
+}
+
+/// Irradiance per unit radiance from a sphere of angular radius sigma
+/// (sin^2 sigma = `sin2_sigma`) whose centre is at angle theta from the
+/// normal (cos theta = `cos_theta`), the part below the horizon excluded.
+/// Snyder (1996), in the form of Lagarde and de Rousiers, "Moving Frostbite
+/// to PBR" (2014), section 4.7.
+pub fn sphere_irradiance(cos_theta: f64, sin2_sigma: f64) -> f64 {
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    if cos_theta * cos_theta > sin2_sigma {
+        PI * sin2_sigma * cos_theta.max(0.0)
+    } else {
+        let x = (1.0 / sin2_sigma - 1.0).max(0.0).sqrt();
+        let y = -x * (cos_theta / sin_theta);
+        let sin_theta_sqrt_y = sin_theta * (1.0 - y * y).max(0.0).sqrt();
+        ((cos_theta * y.clamp(-1.0, 1.0).acos() - x * sin_theta_sqrt_y) * sin2_sigma + (sin_theta_sqrt_y / x).atan())
+            .max(0.0)
+    }
+}
+
+/// The same by brute-force quadrature over the cap (for testing the
+/// closed form): midpoint rule in (theta', phi') about the cap's axis.
+pub fn sphere_irradiance_quadrature(cos_theta: f64, sin2_sigma: f64, n: usize) -> f64 {
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let axis = DVec3::new(sin_theta, 0.0, cos_theta);
+    let (t, b) = (DVec3::new(cos_theta, 0.0, -sin_theta), DVec3::Y);
+    let one_minus_cos_sigma = sin2_sigma / (1.0 + (1.0 - sin2_sigma).sqrt());
+    let mut sum = 0.0;
+    for i in 0..n {
+        // Uniform in 1 - cos over the cap, uniform in phi: equal solid angle.
+        let omc = one_minus_cos_sigma * (i as f64 + 0.5) / n as f64;
+        let c = 1.0 - omc;
+        let s = (omc * (2.0 - omc)).sqrt();
+        for j in 0..n {
+            let phi = 2.0 * PI * (j as f64 + 0.5) / n as f64;
+            let d = t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c;
+            sum += d.z.max(0.0);
+        }
+    }
+    sum * 2.0 * PI * one_minus_cos_sigma / (n * n) as f64
+}
+
+/// A camera `h` above surface point `x` (normal `n`), looking at it with a
+/// 0.2 degree field of view: the image is a patch around `x` so small that
+/// its mean is the radiance leaving `x`.
+fn probe(scene: Scene, x: Vec3, n: Vec3, h: f32) -> Scene {
+    Scene { camera: camera(x + n * h, x, 0.2), ..scene }
+}
+
+/// Runs the whole suite on `targets`.
+pub fn run(targets: &[Target], size: Size) -> Result<Vec<CaseResult>, GpuError> {
+    let mut out = Vec::new();
+    for t in targets {
+        analytic_scenes(t, &mut out)?;
+        irradiance_probes(t, &mut out)?;
+        contact(t, &mut out)?;
+        equal_expectations(t, &mut out)?;
+        metamorphic(t, &mut out)?;
+        accumulation(t, size, &mut out)?;
+    }
+    irradiance_estimator(&mut out);
+    ray_sphere_precision(&mut out);
+    self_intersection(size, &mut out);
+    watertight(size, &mut out);
+    sampling(&mut out);
+    Ok(out)
+}
+
+fn sphere_room(rho: f32, s: f32, radiance: f32, max_bounces: u32) -> Setup {
+    let mut scene = empty_scene(camera(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.0, 0.0, 1.0), 30.0));
+    scene.light = SphereLight::new(Vec3::ZERO, s, Vec3::splat(radiance));
+    scene.spheres = vec![sphere(Vec3::ZERO, 1.0, rho)];
+    Setup::new(scene, 8, 8, 64, max_bounces)
+}
+
+fn analytic_scenes(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    const UNLIMITED: u32 = 1_000_000;
+    for (rho, s, bounces) in [(0.5f32, 0.1f32, UNLIMITED), (0.5, 0.1, 1), (0.95, 0.3, UNLIMITED), (0.0, 0.2, UNLIMITED)]
+    {
+        let setup = sphere_room(rho, s, 10.0, bounces);
+        let expected = sphere_room_radiance(rho as f64, 10.0, s as f64, bounces);
+        let limit = if bounces == UNLIMITED { "unlimited bounces".to_string() } else { format!("{bounces} bounce") };
+        let m = setup.measure(t)?;
+        out.push(CaseResult::monte_carlo(format!("spherical room rho={rho} s={s}, {limit}"), t.name(), expected, &m));
+    }
+    // A Lambertian sphere under a uniform background shows albedo x
+    // background; with albedo 1 it vanishes (white furnace).
+    for albedo in [0.5f32, 1.0] {
+        let mut scene = empty_scene(camera(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 10.0));
+        scene.spheres = vec![sphere(Vec3::ZERO, 1.0, albedo)];
+        scene.background = Vec3::splat(0.8);
+        let m = Setup::new(scene, 8, 8, 32, 5).measure(t)?;
+        out.push(CaseResult::monte_carlo(
+            format!("sphere albedo {albedo} under background 0.8"),
+            t.name(),
+            0.8 * albedo as f64,
+            &m,
+        ));
+    }
+    Ok(())
+}
+
+/// The direction at angle `theta` from +y toward +x.
+fn tilted(theta: f64) -> Vec3 {
+    Vec3::new(theta.sin() as f32, theta.cos() as f32, 0.0)
+}
+
+/// Angles from the normal to the light's centre for the three regimes.
+fn regimes(sigma: f64) -> [(&'static str, f64); 3] {
+    let half_pi = PI / 2.0;
+    [
+        ("above horizon", (0.5 * (half_pi - sigma)).min(0.5)),
+        ("partly below", half_pi),
+        ("below horizon", half_pi + sigma + 0.5 * (half_pi - sigma)),
+    ]
+}
+
+/// Irradiance on a plane from a sphere light, rendered: a floor of albedo 1
+/// seen by a probe, one bounce, so the probe reads E / pi.
+fn irradiance_probes(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    for sin_sigma in [0.01f64, 0.5, 0.999] {
+        for (regime, theta) in regimes(sin_sigma.asin()) {
+            let d = 2.0f32;
+            let mut scene =
+                empty_scene(CameraDesc { position: Vec3::ONE, look_at: Vec3::ZERO, up: Vec3::Y, vfov_degrees: 1.0 });
+            scene.light = SphereLight::new(tilted(theta) * d, d * sin_sigma as f32, Vec3::splat(5.0));
+            scene.walls =
+                vec![wall(Vec3::new(-1e3, 0.0, 1e3), Vec3::new(2e3, 0.0, 0.0), Vec3::new(0.0, 0.0, -2e3), 1.0)];
+            let scene = probe(scene, Vec3::ZERO, Vec3::Y, 1e-3);
+            let m = Setup::new(scene, 4, 4, 256, 1).measure(t)?;
+            let expected = 5.0 * sphere_irradiance(theta.cos(), sin_sigma * sin_sigma) / PI;
+            out.push(CaseResult::monte_carlo(
+                format!("irradiance/pi from a sphere light, sin(a)={sin_sigma}, {regime}"),
+                t.name(),
+                expected,
+                &m,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The NEE estimator of irradiance (cone sampling, cos/pdf), directly.
+fn irradiance_estimator(out: &mut Vec<CaseResult>) {
+    for sin_sigma in [1e-4f64, 1e-2, 0.5, 0.999] {
+        for (regime, theta) in regimes(sin_sigma.asin()) {
+            let d = 3.0f32;
+            let l = SphereLight::new(tilted(theta) * d, d * sin_sigma as f32, Vec3::ONE);
+            let cone = light::light_cone(&l, Vec3::ZERO);
+            let per_seed: Vec<f64> = (0..SEEDS)
+                .map(|seed| {
+                    let mut rng = Rng::new(seed, 1, 2, 3, 4);
+                    let n = 20_000;
+                    let mut sum = 0.0;
+                    for _ in 0..n {
+                        let (dir, _) = cone.sample(rng.next_f32(), rng.next_f32());
+                        sum += (dir.y.max(0.0) / cone.pdf()) as f64;
+                    }
+                    sum / n as f64
+                })
+                .collect();
+            let (mean, stderr) = mean_and_stderr(&per_seed);
+            let m = Measurement { mean, stderr, non_finite: 0 };
+            let expected = sphere_irradiance(theta.cos(), sin_sigma * sin_sigma);
+            out.push(CaseResult::monte_carlo(
+                format!("NEE irradiance estimator, sin(a)={sin_sigma}, {regime}"),
+                "core",
+                expected,
+                &m,
+            ));
+        }
+    }
+}
+
+/// A black sphere of radius 1 resting on a white floor under a uniform sky
+/// of radiance 1: the floor at distance D from the centre shows
+/// 1 - (R / D)^3 (the sphere hides pi sin^2 a cos b of the sky, with sin a
+/// = cos b = R / D), one bounce. No leak and no extra dark ring.
+fn contact(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    for rho in [0.05f32, 0.2, 0.5, 1.0, 2.0] {
+        let mut scene =
+            empty_scene(CameraDesc { position: Vec3::ONE, look_at: Vec3::ZERO, up: Vec3::Y, vfov_degrees: 1.0 });
+        scene.background = Vec3::ONE;
+        scene.spheres = vec![sphere(Vec3::new(0.0, 1.0, 0.0), 1.0, 0.0)];
+        scene.walls = vec![wall(Vec3::new(-1e3, 0.0, 1e3), Vec3::new(2e3, 0.0, 0.0), Vec3::new(0.0, 0.0, -2e3), 1.0)];
+        // The probe sits well inside the gap under the sphere.
+        let gap = 1.0 - (1.0 - rho.min(1.0).powi(2)).sqrt();
+        let x = Vec3::new(rho, 0.0, 0.0);
+        let scene = probe(scene, x, Vec3::Y, (0.25 * gap).min(1e-2));
+        let m = Setup::new(scene, 4, 4, 256, 1).measure(t)?;
+        let dist = (1.0 + (rho as f64).powi(2)).sqrt();
+        out.push(CaseResult::monte_carlo(
+            format!("contact: floor at {rho} from a resting sphere"),
+            t.name(),
+            1.0 - dist.powi(-3),
+            &m,
+        ));
+    }
+    Ok(())
+}
+
+/// Per-region z statistics of two sets of per-seed images.
+fn largest_region_z(a: &[Image], b: &[Image], w: u32, h: u32, block: u32) -> (f64, usize) {
+    let ra: Vec<_> = a.iter().map(|i| region_means(i, w, h, block)).collect();
+    let rb: Vec<_> = b.iter().map(|i| region_means(i, w, h, block)).collect();
+    let mut worst = 0.0f64;
+    let mut tests = 0;
+    for r in 0..ra[0].len() {
+        for c in 0..3 {
+            let (ma, sa) = mean_and_stderr(&ra.iter().map(|x| x[r][c]).collect::<Vec<_>>());
+            let (mb, sb) = mean_and_stderr(&rb.iter().map(|x| x[r][c]).collect::<Vec<_>>());
+            let se = (sa * sa + sb * sb).sqrt();
+            tests += 1;
+            if se > 0.0 {
+                worst = worst.max(((ma - mb) / se).abs());
+            } else if ma != mb {
+                worst = f64::INFINITY;
+            }
+        }
+    }
+    (worst, tests)
+}
+
+/// The critical |z| for `tests` comparisons at family-wise 1% with a t
+/// statistic of 2 x SEEDS - 2 degrees of freedom (conservative: 6.0 for up
+/// to ~200 tests, from the t tail 1% / 200 = 5e-5 at 30 dof, ~4.9, rounded
+/// up for the error in the estimated standard errors).
+const REGION_Z_CRIT: f64 = 6.0;
+
+fn default_small() -> Setup {
+    Setup::new(Scene::default_scene(), 24, 24, 16, 5)
+}
+
+fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    let base = default_small();
+    let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
+    let variants: [Variant; 3] = [
+        ("NEE off (BSDF sampling only)", |s| s.flags = 0),
+        ("MIS off (NEE only after a bounce)", |s| s.flags = FLAG_NEE),
+        ("Russian roulette off", |s| s.settings.rr_start = 1_000_000),
+    ];
+    for (name, change) in variants {
+        let mut v = default_small();
+        change(&mut v);
+        let (images, bad) = v.images(t, 100..100 + SEEDS)?;
+        let (z, tests) = largest_region_z(&ref_images, &images, 24, 24, 8);
+        out.push(CaseResult::new(
+            format!("same image with {name}: largest region |z| of {tests}"),
+            t.name(),
+            0.0,
+            z,
+            0.0,
+            REGION_Z_CRIT,
+            bad + bad0,
+        ));
+    }
+    Ok(())
+}
+
+/// Scales and translates the default scene.
+fn transformed(scale: f32, offset: Vec3) -> Scene {
+    let mut s = Scene::default_scene();
+    let f = |p: Vec3| p * scale + offset;
+    s.camera.position = f(s.camera.position);
+    s.camera.look_at = f(s.camera.look_at);
+    s.light.center = f(s.light.center);
+    s.light.radius *= scale;
+    for w in &mut s.walls {
+        let g = w.wall;
+        w.wall = Wall::new(f(g.corner), g.edge_u * scale, g.edge_v * scale, g.albedo);
+    }
+    for sp in &mut s.spheres {
+        sp.sphere.center = f(sp.sphere.center);
+        sp.sphere.radius *= scale;
+    }
+    s
+}
+
+fn metamorphic(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    let base = default_small();
+    let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
+    for (name, scene) in [
+        ("scene scaled by 1e-3", transformed(1e-3, Vec3::ZERO)),
+        ("scene scaled by 1e3", transformed(1e3, Vec3::ZERO)),
+        ("scene moved by 1e3", transformed(1.0, Vec3::splat(1e3))),
+    ] {
+        let setup = Setup::new(scene, 24, 24, 16, 5);
+        let (images, bad) = setup.images(t, 200..200 + SEEDS)?;
+        let (z, tests) = largest_region_z(&ref_images, &images, 24, 24, 8);
+        out.push(CaseResult::new(
+            format!("same image with the {name}: largest region |z| of {tests}"),
+            t.name(),
+            0.0,
+            z,
+            0.0,
+            REGION_Z_CRIT,
+            bad + bad0,
+        ));
+    }
+    // Doubling the light doubles every sample exactly (same seed: the same
+    // paths, and x2 is exact in floating point).
+    let mut doubled = default_small();
+    doubled.scene.light.radiance *= 2.0;
+    let (a, _) = base.images(t, 0..1)?;
+    let (b, bad) = doubled.images(t, 0..1)?;
+    let worst = a[0]
+        .iter()
+        .zip(&b[0])
+        .flat_map(|(x, y)| (0..3).map(move |c| ((y[c] - 2.0 * x[c]) as f64).abs()))
+        .fold(0.0, f64::max);
+    out.push(CaseResult::new(
+        "doubling the light doubles the image: max |I2 - 2 I1|",
+        t.name(),
+        0.0,
+        worst,
+        0.0,
+        0.0,
+        bad,
+    ));
+    Ok(())
+}
+
+/// After 2^24 (and, full size, 2^25) samples per pixel the compensated mean
+/// is still right: relative error under 1e-5 against an f64 sum of the
+/// same samples. The samples are the background seen by camera rays in an
+/// empty scene, 0.1 per channel: not representable in binary.
+fn accumulation(t: &Target, size: Size, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+    let spp: u32 = if size == Size::Full { 1 << 25 } else { 1 << 24 };
+    let mut scene = empty_scene(camera(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 40.0));
+    scene.background = Vec3::splat(0.1);
+    let setup = Setup::new(scene, 1, 1, spp, 5);
+    let accum = t.render(setup.params(0), &[], &[], spp, 1 << 16)?;
+    let p = accum[0];
+    let expected = 0.1f32 as f64;
+    let measured = p.mean().x as f64;
+    out.push(CaseResult::new(
+        format!("mean after {spp} samples per pixel (relative error < 1e-5)"),
+        t.name(),
+        expected,
+        measured,
+        0.0,
+        1e-5 * expected,
+        p.non_finite as u64,
+    ));
+    Ok(())
+}
+
+/// Ray/sphere hits against an f64 computation: the distance of the hit
+/// point `o + t d` (t from f32, the rest in f64) from the true sphere, in
+/// units of the f32 resolution of the coordinates involved, eps x max(|o|,
+/// |c| + r). An f32 `t` cannot do better than about one unit; tolerance 8.
+fn ray_sphere_precision(out: &mut Vec<CaseResult>) {
+    struct Cfg {
+        name: &'static str,
+        center: Vec3,
+        radius: f32,
+        origin: fn(&mut Rng, Vec3, f32) -> Vec3,
+        /// Perpendicular offset of the aim point as a fraction of the radius.
+        aim: f32,
+    }
+    let outside = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * (r * 5.0);
+    let far = |rng: &mut Rng, c: Vec3, _r: f32| c + random_dir(rng) * 1e4;
+    let on_surface = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * r;
+    let inside = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * (r * 0.5 * rng.next_f32());
+    let cases = [
+        Cfg { name: "far sphere (1e4 away)", center: Vec3::new(3.0, -2.0, 1.0), radius: 1.0, origin: far, aim: 0.9 },
+        Cfg {
+            name: "tiny sphere (radius 1e-3)",
+            center: Vec3::new(0.2, 0.1, -0.4),
+            radius: 1e-3,
+            origin: outside,
+            aim: 0.9,
+        },
+        Cfg {
+            name: "tangent rays (aim at 0.99999 r)",
+            center: Vec3::new(1.0, 1.0, 1.0),
+            radius: 2.0,
+            origin: outside,
+            aim: 0.99999,
+        },
+        Cfg {
+            name: "origin on the surface",
+            center: Vec3::new(-1.0, 0.5, 2.0),
+            radius: 0.7,
+            origin: on_surface,
+            aim: 0.3,
+        },
+        Cfg { name: "origin inside", center: Vec3::new(0.0, 3.0, 0.0), radius: 1.5, origin: inside, aim: 0.3 },
+    ];
+    for cfg in cases {
+        let mut rng = Rng::new(11, 22, 33, 44, 55);
+        let mut worst = 0.0f64;
+        let mut misses = 0;
+        for _ in 0..100_000 {
+            let o = (cfg.origin)(&mut rng, cfg.center, cfg.radius);
+            // Aim at a point at `aim` r from the centre, across the view.
+            let to_c = (cfg.center - o).normalize_or(Vec3::X);
+            let (tb, _) = pt_core::sampling::orthonormal_basis(to_c);
+            let target = cfg.center + tb * (cfg.aim * cfg.radius * rng.next_f32());
+            let Some(dir) = (target - o).try_normalize() else { continue };
+            let ray = Ray { origin: o, dir };
+            let t = intersect_sphere(cfg.center, cfg.radius, &ray, 1e-4 * cfg.radius, f32::MAX);
+            if t == f32::MAX {
+                misses += 1;
+                continue;
+            }
+            let p = ray.origin.as_dvec3() + ray.dir.as_dvec3() * t as f64;
+            let resolution = f32::EPSILON as f64 * (o.length().max(cfg.center.length() + cfg.radius)) as f64;
+            let err = ((p - cfg.center.as_dvec3()).length() - cfg.radius as f64).abs() / resolution;
+            worst = worst.max(err);
+        }
+        // Every ray aims inside the sphere: a miss is an error too.
+        let measured = if misses > 0 { f64::INFINITY } else { worst };
+        out.push(CaseResult::new(
+            format!("ray/sphere, {}: hit point off the sphere, in f32 ulps", cfg.name),
+            "core",
+            0.0,
+            measured,
+            0.0,
+            8.0,
+            0,
+        ));
+    }
+}
+
+/// The far root of a ray from inside a sphere, in f64 from the f32 inputs.
+fn far_root_f64(center: Vec3, radius: f32, o: Vec3, d: Vec3) -> f64 {
+    let (f, d) = (o.as_dvec3() - center.as_dvec3(), d.as_dvec3().normalize());
+    let b = f.dot(d);
+    let c = f.dot(f) - (radius as f64).powi(2);
+    -b + (b * b - c).max(0.0).sqrt()
+}
+
+fn random_dir(rng: &mut Rng) -> Vec3 {
+    let z = 1.0 - 2.0 * rng.next_f32();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// From hit points on spheres (outside and inside) and walls at scales
+/// 1e-3 to 1e4, spawned reflection rays never re-hit their own surface
+/// (inside a sphere, the hit is the far side, not the start) and shadow rays
+/// to points in the visible hemisphere are never blocked by it.
+fn self_intersection(size: Size, out: &mut Vec<CaseResult>) {
+    let per_scale: u32 = if size == Size::Full { 200_000 } else { 20_000 };
+    let scales = [1e-3f32, 1e-1, 1.0, 1e2, 1e4];
+    let failures: u64 = scales
+        .par_iter()
+        .map(|&s| {
+            let mut fails = 0u64;
+            let mut rng = Rng::new(s.to_bits(), 7, 0, 0, 0);
+            let center = Vec3::new(0.3, -0.7, 0.2) * s;
+            let wall = Wall::new(
+                Vec3::new(-1.0, 0.2, 1.0) * s,
+                Vec3::new(2.0, 0.1, 0.0) * s,
+                Vec3::new(0.0, 0.3, -2.0) * s,
+                Vec3::ONE,
+            );
+            for _ in 0..per_scale {
+                // Sphere, from outside: the hit, its reflection and a shadow ray.
+                let o = center + random_dir(&mut rng) * (3.0 * s);
+                let dir = (center + random_dir(&mut rng) * (0.5 * s) - o).normalize();
+                let ray = Ray { origin: o, dir };
+                let t = intersect_sphere(center, s, &ray, 0.0, f32::MAX);
+                if t < f32::MAX {
+                    let (p, n) = sphere_hit_point(center, s, &ray, t);
+                    let origin = offset_origin(p, n, center.abs() + Vec3::splat(s));
+                    let refl = Ray { origin, dir: cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) };
+                    fails += (intersect_sphere(center, s, &refl, 0.0, f32::MAX) < f32::MAX) as u64;
+                    let target =
+                        p + cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) * (s * 2.0 * rng.next_f32().max(1e-3));
+                    let to = target - origin;
+                    let shadow = Ray { origin, dir: to.normalize() };
+                    fails += (intersect_sphere(center, s, &shadow, 0.0, to.length()) < to.length()) as u64;
+                }
+                // Sphere from inside (a spherical room): the reflection must
+                // find the far side (within 1e-4 r of the f64 root from the
+                // same origin), not its own start.
+                let o = center + random_dir(&mut rng) * (0.5 * s);
+                let ray = Ray { origin: o, dir: random_dir(&mut rng) };
+                let t = intersect_sphere(center, s, &ray, 0.0, f32::MAX);
+                let (p, n_out) = sphere_hit_point(center, s, &ray, t);
+                let n = -n_out;
+                let origin = offset_origin(p, n, center.abs() + Vec3::splat(s));
+                let d = cosine_hemisphere(n, rng.next_f32(), rng.next_f32());
+                let t2 = intersect_sphere(center, s, &Ray { origin, dir: d }, 0.0, f32::MAX);
+                fails += ((t2 as f64 - far_root_f64(center, s, origin, d)).abs() > 1e-4 * s as f64) as u64;
+                // Wall: the integrator skips the wall it leaves, but the offset
+                // alone must also keep the ray off it.
+                let o = Vec3::new(0.1, 2.0, -0.2) * s;
+                let aim = wall.corner + wall.edge_u * rng.next_f32() + wall.edge_v * rng.next_f32();
+                let ray = Ray { origin: o, dir: (aim - o).normalize() };
+                let t = intersect_wall(&wall, &ray, 0.0, f32::MAX);
+                if t < f32::MAX {
+                    let n = if wall.normal.dot(ray.dir) < 0.0 { wall.normal } else { -wall.normal };
+                    let origin = offset_origin(ray.at(t), n, ray.origin.abs() + (ray.dir * t).abs());
+                    let refl = Ray { origin, dir: cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) };
+                    fails += (intersect_wall(&wall, &refl, 0.0, f32::MAX) < f32::MAX) as u64;
+                } else {
+                    fails += 1;
+                }
+            }
+            fails
+        })
+        .sum();
+    let points = per_scale as u64 * scales.len() as u64 * 3;
+    out.push(CaseResult::new(
+        format!("self-intersection: {points} hit points at scales 1e-3..1e4, failures"),
+        "core",
+        0.0,
+        failures as f64,
+        0.0,
+        0.0,
+        0,
+    ));
+}
+
+/// Rays from inside a closed box aimed exactly at its edges and corners:
+/// none escapes through a seam.
+fn watertight(size: Size, out: &mut Vec<CaseResult>) {
+    let rays: u32 = if size == Size::Full { 10_000_000 } else { 1_000_000 };
+    let scene = {
+        let mut s = Scene::default_scene();
+        // Close the room: add the front wall.
+        s.walls.push(wall(Vec3::new(1.0, 0.0, 1.0), Vec3::new(-2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), 0.5));
+        s
+    };
+    let mut params = scene.frame_params(&RenderSettings::default(), 1, 0);
+    params.sphere_count = 0;
+    let walls = scene.gpu_walls();
+    let chunks = 64u32;
+    let escapes: u64 = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut rng = Rng::new(c, 99, 0, 0, 0);
+            let mut escaped = 0u64;
+            for i in 0..rays / chunks {
+                let o = Vec3::new(2.0 * rng.next_f32() - 1.0, 2.0 * rng.next_f32(), 2.0 * rng.next_f32() - 1.0) * 0.999;
+                // A point on one of the 12 edges, or a corner.
+                let corner = |k: u32| {
+                    Vec3::new(
+                        if k & 1 == 0 { -1.0 } else { 1.0 },
+                        if k & 2 == 0 { 0.0 } else { 2.0 },
+                        if k & 4 == 0 { -1.0 } else { 1.0 },
+                    )
+                };
+                let target = if i % 8 == 0 {
+                    corner(rng.next_u32() % 8)
+                } else {
+                    let a = corner(rng.next_u32() % 8);
+                    let axis = rng.next_u32() % 3;
+                    let mut b = a;
+                    match axis {
+                        0 => b.x = -a.x,
+                        1 => b.y = 2.0 - a.y,
+                        _ => b.z = -a.z,
+                    }
+                    a.lerp(b, rng.next_f32())
+                };
+                let Some(dir) = (target - o).try_normalize() else { continue };
+                let hit = integrator::closest_hit(
+                    &Ray { origin: o, dir },
+                    &params,
+                    &walls,
+                    &[],
+                    integrator::NO_WALL,
+                    integrator::T_FAR,
+                );
+                escaped += (hit.kind == integrator::HitKind::Nothing) as u64;
+            }
+            escaped
+        })
+        .sum();
+    out.push(CaseResult::new(
+        format!("watertight: {rays} rays at the edges and corners of a closed box, escapes"),
+        "core",
+        0.0,
+        escapes as f64,
+        0.0,
+        0.0,
+        0,
+    ));
+}
+
+fn sampling(out: &mut Vec<CaseResult>) {
+    let bins = SphereBins { nt: 20, np: 40 };
+    let n = 400_000usize;
+    let tests = 5.0;
+    // Sidak: each test at 1 - (1 - alpha)^(1/tests).
+    let alpha_each = 1.0 - (1.0 - SAMPLING_ALPHA).powf(1.0 / tests);
+    let mut chi2_case = |name: String, sample: &dyn Fn(&mut Rng) -> Vec3, pdf: &dyn Fn([f64; 3]) -> f64| {
+        let mut rng = Rng::new(5, 6, 7, 8, 9);
+        let mut observed = vec![0.0; bins.nt * bins.np];
+        for _ in 0..n {
+            let d = sample(&mut rng);
+            observed[bins.cell([d.x as f64, d.y as f64, d.z as f64])] += 1.0;
+        }
+        let expected = bins.expected(n, 8, pdf);
+        let r = chi2_test(&observed, &expected);
+        // Reported as the p-value, which must not fall below alpha_each.
+        out.push(CaseResult {
+            case: format!("chi-square {name}: p-value (chi2 {:.1}, {} dof) >= {alpha_each:.2e}", r.chi2, r.dof),
+            backend: "core",
+            expected: 1.0,
+            measured: r.p_value,
+            stderr: 0.0,
+            tolerance: 1.0 - alpha_each,
+            non_finite: 0,
+            pass: r.p_value >= alpha_each,
+        });
+    };
+    let normal = Vec3::new(0.3, -0.4, 0.866).normalize();
+    let nd = normal.as_dvec3();
+    chi2_case("cosine hemisphere".into(), &|rng| cosine_hemisphere(normal, rng.next_f32(), rng.next_f32()), &|d| {
+        DVec3::from_array(d).dot(nd).max(0.0) / PI
+    });
+    // The light cone is binned in its own frame: bands of equal width in
+    // cos(theta) about the axis over [cos_max, 1] and sectors of phi are
+    // equal solid angles of the cap, so each expects n / cells exactly; a
+    // sample outside the cap lands in an extra cell that expects none.
+    for sin_sigma in [0.05f32, 0.5, 0.95] {
+        let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
+        let cone = light::light_cone(&l, Vec3::ZERO);
+        let (tb, bb) = pt_core::sampling::orthonormal_basis(cone.axis);
+        let (axis, tb, bb) = (cone.axis.as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
+        let omc = cone.one_minus_cos_max as f64;
+        let (nt, np) = (20usize, 40usize);
+        let mut rng = Rng::new(5, 6, 7, 8, 9);
+        let mut observed = vec![0.0; nt * np + 1];
+        for _ in 0..n {
+            // Normalised in f64: the test is about where directions point,
+            // and an f32 unit vector is unit only to ~1e-7.
+            let d = cone.sample(rng.next_f32(), rng.next_f32()).0.as_dvec3().normalize();
+            let band = (1.0 - d.dot(axis)) / omc;
+            let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
+            // A hair of slack at the rim and the axis for f32 rounding.
+            let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
+                nt * np
+            } else {
+                ((band * nt as f64) as usize).min(nt - 1) * np + ((phi / (2.0 * PI) * np as f64) as usize).min(np - 1)
+            };
+            observed[cell] += 1.0;
+        }
+        let outside = observed[nt * np];
+        let r = chi2_test(&observed[..nt * np], &vec![n as f64 / (nt * np) as f64; nt * np]);
+        out.push(CaseResult {
+            case: format!(
+                "chi-square sphere light cone, sin(a)={sin_sigma}: p-value (chi2 {:.1}, {} dof, {outside} outside) >= {alpha_each:.2e}",
+                r.chi2, r.dof
+            ),
+            backend: "core",
+            expected: 1.0,
+            measured: r.p_value,
+            stderr: 0.0,
+            tolerance: 1.0 - alpha_each,
+            non_finite: 0,
+            pass: r.p_value >= alpha_each && outside == 0.0,
+        });
+    }
+    // The RNG: 1e6 floats in 1000 bins.
+    let mut rng = Rng::new(1, 2, 3, 4, 5);
+    let mut obs = vec![0.0; 1000];
+    for _ in 0..1_000_000 {
+        obs[(rng.next_f32() * 1000.0) as usize] += 1.0;
+    }
+    let r = chi2_test(&obs, &vec![1000.0; 1000]);
+    out.push(CaseResult {
+        case: format!("chi-square RNG uniformity: p-value (chi2 {:.1}, {} dof) >= {alpha_each:.2e}", r.chi2, r.dof),
+        backend: "core",
+        expected: 1.0,
+        measured: r.p_value,
+        stderr: 0.0,
+        tolerance: 1.0 - alpha_each,
+        non_finite: 0,
+        pass: r.p_value >= alpha_each,
+    });
+
+    // Densities integrate to one (midpoint rule in f64, 2000 x 2000 cells).
+    let bins = SphereBins { nt: 200, np: 200 };
+    let cos_total: f64 = bins.expected(1, 10, |d| DVec3::from_array(d).dot(nd).max(0.0) / PI).iter().sum();
+    out.push(CaseResult::new("cosine hemisphere pdf integrates to 1", "core", 1.0, cos_total, 0.0, 1e-4, 0));
+    for sin_sigma in [0.01f64, 0.5, 0.999] {
+        let l = SphereLight::new(Vec3::new(0.0, 0.0, 2.0), (2.0 * sin_sigma) as f32, Vec3::ONE);
+        let cone = light::light_cone(&l, Vec3::ZERO);
+        // Solid angle of the cap 2 pi (1 - cos) in f64, times the f32 pdf.
+        let cap = 2.0 * PI * (sin_sigma * sin_sigma) / (1.0 + (1.0 - sin_sigma * sin_sigma).sqrt());
+        out.push(CaseResult::new(
+            format!("cone pdf x cap solid angle = 1, sin(a)={sin_sigma}"),
+            "core",
+            1.0,
+            cone.pdf() as f64 * cap,
+            0.0,
+            1e-5,
+            0,
+        ));
+    }
+    // No correlation between neighbouring pixels or consecutive frames.
+    for (name, dx, dframe) in [("neighbouring pixels", 1u32, 0u32), ("consecutive frames", 0, 1)] {
+        let n = 200_000u32;
+        let (mut sa, mut sb, mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in 0..n {
+            let (x, y) = (i % 500, i / 500);
+            let a = Rng::new(x, y, 3, 0, 0).next_f32() as f64;
+            let b = Rng::new(x + dx, y, 3 + dframe, 0, 0).next_f32() as f64;
+            sa += a;
+            sb += b;
+            sab += a * b;
+            saa += a * a;
+            sbb += b * b;
+        }
+        let nf = n as f64;
+        let cov = sab / nf - sa * sb / (nf * nf);
+        let corr = cov / ((saa / nf - (sa / nf).powi(2)) * (sbb / nf - (sb / nf).powi(2))).sqrt();
+        // Under independence corr ~ N(0, 1/n).
+        let se = 1.0 / nf.sqrt();
+        out.push(CaseResult::new(format!("RNG correlation of {name}"), "core", 0.0, corr, se, Z_CRIT * se, 0));
+    }
+}
+
+/// The report as a markdown table.
+pub fn markdown_table(results: &[CaseResult]) -> String {
+    let mut s = String::from(
+        "| case | backend | expected | measured | std. error | tolerance | NaN/Inf | pass |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in results {
+        s.push_str(&format!(
+            "| {} | {} | {:.6e} | {:.6e} | {:.2e} | {:.2e} | {} | {} |\n",
+            r.case,
+            r.backend,
+            r.expected,
+            r.measured,
+            r.stderr,
+            r.tolerance,
+            r.non_finite,
+            if r.pass { "yes" } else { "**NO**" }
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_irradiance_matches_quadrature_in_all_regimes() {
+        for sin_sigma in [0.05f64, 0.5, 0.95] {
+            for theta in [0.1f64, 0.8, 1.4, PI / 2.0, 1.9, 2.5] {
+                let exact = sphere_irradiance(theta.cos(), sin_sigma * sin_sigma);
+                let quad = sphere_irradiance_quadrature(theta.cos(), sin_sigma * sin_sigma, 800);
+                assert!((exact - quad).abs() < 2e-4 * (1.0 + quad), "sin {sin_sigma} theta {theta}: {exact} vs {quad}");
+            }
+        }
+    }
+
+    #[test]
+    fn sphere_room_radiance_limits() {
+        // One bounce: rho L s^2. Unlimited: the geometric series.
+        assert!((sphere_room_radiance(0.5, 10.0, 0.1, 1) - 0.05).abs() < 1e-12);
+        let b = sphere_room_radiance(0.5, 10.0, 0.1, 1_000_000);
+        assert!((b - 0.5 * 10.0 * 0.01 / (1.0 - 0.5 * 0.99)).abs() < 1e-12);
+        assert_eq!(sphere_room_radiance(0.0, 10.0, 0.1, 1_000_000), 0.0);
+    }
+}
