@@ -116,9 +116,50 @@ pub fn occluded(
     false
 }
 
+/// Counts the rays a path traces (closest-hit and shadow rays), for the
+/// benchmark's rays per second. The renderers use [`NoRayCount`], which
+/// compiles to nothing.
+pub trait RayCounter {
+    /// One ray was traced.
+    fn ray(&mut self);
+}
+
+/// The counter that counts nothing.
+pub struct NoRayCount;
+
+impl RayCounter for NoRayCount {
+    #[inline]
+    fn ray(&mut self) {}
+}
+
+/// A counter of rays (CPU only: the kernel never counts).
+#[cfg(not(target_arch = "spirv"))]
+#[derive(Default)]
+pub struct RayCount(pub u64);
+
+#[cfg(not(target_arch = "spirv"))]
+impl RayCounter for RayCount {
+    #[inline]
+    fn ray(&mut self) {
+        self.0 += 1;
+    }
+}
+
 /// Radiance arriving along `ray`: one path sample, unbiased for
 /// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
-pub fn trace_path(mut ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut Rng) -> Vec3 {
+pub fn trace_path(ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut Rng) -> Vec3 {
+    trace_path_counted(ray, params, walls, spheres, rng, &mut NoRayCount)
+}
+
+/// [`trace_path`], counting its rays in `rays`.
+pub fn trace_path_counted<C: RayCounter>(
+    mut ray: Ray,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    rng: &mut Rng,
+    rays: &mut C,
+) -> Vec3 {
     let nee = params.flags & FLAG_NEE != 0;
     let mis = params.flags & FLAG_MIS != 0;
     let light = params.light;
@@ -132,6 +173,7 @@ pub fn trace_path(mut ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &
     let mut nee_pdf = 0.0f32;
 
     loop {
+        rays.ray();
         let hit = closest_hit(&ray, params, walls, spheres, skip_wall, T_FAR);
         if hit.kind == HitKind::Nothing {
             radiance += throughput * params.background;
@@ -182,6 +224,7 @@ pub fn trace_path(mut ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &
             let cos = n.dot(dir);
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
+                rays.ray();
                 if !occluded(&shadow, params, walls, spheres, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
                     let weight = if mis { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
@@ -214,6 +257,27 @@ pub fn trace_path(mut ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &
     radiance
 }
 
+/// Rays traced by the samples of pixel (`x`, `y`) in one frame: what
+/// [`render_pixel`] does, counting instead of accumulating (benchmarks).
+#[cfg(not(target_arch = "spirv"))]
+pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> u64 {
+    let mut count = RayCount::default();
+    for s in 0..params.samples_per_frame {
+        let (ray, mut rng) = camera_sample(x, y, s, params);
+        trace_path_counted(ray, params, walls, spheres, &mut rng, &mut count);
+    }
+    count.0
+}
+
+/// The random stream and the primary ray of camera sample `s` of pixel
+/// (`x`, `y`) in this frame, jittered uniformly in the pixel (a box filter).
+pub fn camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> (Ray, Rng) {
+    let mut rng = Rng::new(x, y, params.frame, s, params.seed);
+    let fx = x as f32 + rng.next_f32();
+    let fy = y as f32 + rng.next_f32();
+    (params.camera.ray(fx, fy, params.width, params.height), rng)
+}
+
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame` camera
 /// rays jittered uniformly in the pixel (a box filter), non-finite results
 /// counted and discarded.
@@ -224,10 +288,7 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, walls: &[Wall], sphere
     let mut compensation = Vec3::ZERO;
     let mut s = 0;
     while s < params.samples_per_frame {
-        let mut rng = Rng::new(x, y, params.frame, s, params.seed);
-        let fx = x as f32 + rng.next_f32();
-        let fy = y as f32 + rng.next_f32();
-        let ray = params.camera.ray(fx, fy, params.width, params.height);
+        let (ray, mut rng) = camera_sample(x, y, s, params);
         let l = trace_path(ray, params, walls, spheres, &mut rng);
         if is_finite(l) {
             // width != 0 always; the compiler cannot know it (see kahan_add).

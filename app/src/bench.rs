@@ -1,0 +1,524 @@
+//! `pathtracer bench`: throughput, and error against time.
+//!
+//! Throughput: frames, camera samples and rays per second for a list of
+//! configurations, GPU and CPU side by side. Convergence: relMSE, MAPE and
+//! RMSE against a reference at increasing times, over several seeds, for
+//! each sampling strategy; a CSV, a log-log plot and a markdown table.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use pt_core::params::{FLAG_NEE, FLAGS_DEFAULT};
+use pt_core::{AccumPixel, FrameParams, integrator};
+use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer};
+use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
+use rayon::prelude::*;
+
+/// A throughput configuration.
+pub struct ThroughputConfig {
+    /// Label in the report.
+    pub name: &'static str,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel per frame.
+    pub spp: u32,
+    /// Max bounces.
+    pub bounces: u32,
+}
+
+/// The configurations measured; the first is the original OpenGL design's.
+pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 4] = [
+    ThroughputConfig {
+        name: "original design: 1920x1080, 4 spp/frame, 5 bounces",
+        width: 1920,
+        height: 1080,
+        spp: 4,
+        bounces: 5,
+    },
+    ThroughputConfig { name: "512x512, 4 spp/frame, 5 bounces", width: 512, height: 512, spp: 4, bounces: 5 },
+    ThroughputConfig { name: "512x512, 16 spp/frame, 5 bounces", width: 512, height: 512, spp: 16, bounces: 5 },
+    ThroughputConfig { name: "512x512, 4 spp/frame, 1 bounce", width: 512, height: 512, spp: 4, bounces: 1 },
+];
+
+/// One measured row.
+pub struct ThroughputRow {
+    /// Configuration label.
+    pub config: String,
+    /// "GPU (adapter)" or "CPU (n threads)".
+    pub backend: String,
+    /// Median frames per second, with min and max over repetitions.
+    pub fps: (f64, f64, f64),
+    /// Camera samples per second at the median.
+    pub samples_per_second: f64,
+    /// Rays (closest-hit and shadow) per second at the median.
+    pub rays_per_second: f64,
+    /// Rays per camera sample (counted on the CPU over a pixel subset).
+    pub rays_per_sample: f64,
+    /// How frames were timed.
+    pub timing: &'static str,
+}
+
+/// Rays per camera sample of a configuration: the CPU's instrumented trace
+/// over every 4th pixel in x and y (same code, same distribution as the GPU).
+fn rays_per_sample(params: &FrameParams, scene: &Scene) -> f64 {
+    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    let rows: Vec<u32> = (0..params.height).step_by(4).collect();
+    let (rays, samples) = rows
+        .par_iter()
+        .map(|&y| {
+            let mut r = 0u64;
+            let mut n = 0u64;
+            for x in (0..params.width).step_by(4) {
+                r += integrator::count_pixel_rays(x, y, params, &walls, &spheres);
+                n += params.samples_per_frame as u64;
+            }
+            (r, n)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    rays as f64 / samples as f64
+}
+
+fn median_min_max(mut v: Vec<f64>) -> (f64, f64, f64) {
+    v.sort_by(f64::total_cmp);
+    (v[v.len() / 2], v[0], v[v.len() - 1])
+}
+
+/// Measures every configuration on the GPU (when `ctx` is given) and the
+/// CPU: one warm-up frame, then `reps` timed frames.
+pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Result<Vec<ThroughputRow>> {
+    let mut rows = Vec::new();
+    for cfg in &THROUGHPUT_CONFIGS {
+        let settings = RenderSettings {
+            width: cfg.width,
+            height: cfg.height,
+            spp: cfg.spp,
+            max_bounces: cfg.bounces,
+            rr_start: 3,
+        };
+        let params = scene.frame_params(&settings, cfg.spp, 1);
+        let rps = rays_per_sample(&params, scene);
+        let samples = cfg.width as f64 * cfg.height as f64 * cfg.spp as f64;
+        if let Some(ctx) = ctx {
+            let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres())?;
+            let timer = if ctx.is_software() { None } else { GpuTimer::new(ctx) };
+            r.submit_frame(cfg.spp);
+            ctx.wait()?;
+            let mut times = Vec::new();
+            for _ in 0..reps {
+                let start = Instant::now();
+                r.submit_frame_timed(cfg.spp, timer.as_ref());
+                ctx.wait()?;
+                let wall = start.elapsed().as_secs_f64();
+                times.push(match &timer {
+                    Some(t) => t.read_ms(ctx)? * 1e-3,
+                    None => wall,
+                });
+            }
+            rows.push(row(cfg, format!("GPU: {}", ctx.adapter_info.name), times, samples, rps, timer.is_some()));
+        }
+        let mut cpu = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
+        cpu.render_frame(cfg.spp);
+        let mut times = Vec::new();
+        for _ in 0..reps {
+            let start = Instant::now();
+            cpu.render_frame(cfg.spp);
+            times.push(start.elapsed().as_secs_f64());
+        }
+        rows.push(row(cfg, format!("CPU: {} threads", rayon::current_num_threads()), times, samples, rps, false));
+    }
+    Ok(rows)
+}
+
+fn row(
+    cfg: &ThroughputConfig,
+    backend: String,
+    times: Vec<f64>,
+    samples: f64,
+    rps: f64,
+    timestamps: bool,
+) -> ThroughputRow {
+    let fps: Vec<f64> = times.iter().map(|t| 1.0 / t).collect();
+    let (med, lo, hi) = median_min_max(fps);
+    ThroughputRow {
+        config: cfg.name.to_string(),
+        backend,
+        fps: (med, lo, hi),
+        samples_per_second: med * samples,
+        rays_per_second: med * samples * rps,
+        rays_per_sample: rps,
+        timing: if timestamps { "GPU timestamps" } else { "wall clock, synchronised" },
+    }
+}
+
+/// The throughput table in markdown.
+pub fn throughput_markdown(rows: &[ThroughputRow]) -> String {
+    let mut s = String::from(
+        "| configuration | backend | frames/s (median) | min-max | camera samples/s | rays/sample | rays/s | timing |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.3} | {:.3}-{:.3} | {:.3e} | {:.2} | {:.3e} | {} |",
+            r.config,
+            r.backend,
+            r.fps.0,
+            r.fps.1,
+            r.fps.2,
+            r.samples_per_second,
+            r.rays_per_sample,
+            r.rays_per_second,
+            r.timing
+        );
+    }
+    s
+}
+
+/// A sampling strategy compared for convergence.
+#[derive(Clone, Copy)]
+pub struct Strategy {
+    /// Label.
+    pub name: &'static str,
+    /// Integrator flags.
+    pub flags: u32,
+    /// Russian roulette start.
+    pub rr_start: u32,
+    /// Samples per pixel per frame.
+    pub spp_per_frame: u32,
+}
+
+/// The strategies compared; the first is the default configuration.
+pub const STRATEGIES: [Strategy; 7] = [
+    Strategy { name: "default: NEE+MIS, RR from 3, 4 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 4 },
+    Strategy { name: "NEE+MIS, RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 4 },
+    Strategy { name: "NEE+MIS, no RR", flags: FLAGS_DEFAULT, rr_start: 1_000_000, spp_per_frame: 4 },
+    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE, rr_start: 3, spp_per_frame: 4 },
+    Strategy { name: "BSDF sampling only (no NEE)", flags: 0, rr_start: 3, spp_per_frame: 4 },
+    Strategy { name: "NEE+MIS, RR from 3, 1 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 1 },
+    Strategy { name: "NEE+MIS, RR from 3, 16 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
+];
+
+/// One point of a convergence curve.
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// Backend label.
+    pub backend: String,
+    /// Strategy label.
+    pub strategy: String,
+    /// Seed.
+    pub seed: u32,
+    /// Samples per pixel so far.
+    pub spp: u32,
+    /// Seconds of rendering so far (evaluation excluded).
+    pub time: f64,
+    /// relMSE against the reference.
+    pub rel_mse: f64,
+    /// MAPE.
+    pub mape: f64,
+    /// RMSE.
+    pub rmse: f64,
+}
+
+fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
+    accum.iter().map(|p| p.mean().to_array()).collect()
+}
+
+/// Renders the reference: `spp` samples per pixel on the CPU.
+pub fn reference(scene: &Scene, settings: &RenderSettings, spp: u32) -> Vec<[f32; 3]> {
+    let mut r =
+        CpuRenderer::new(scene.frame_params(settings, 64, REFERENCE_SEED), &scene.gpu_walls(), &scene.gpu_spheres());
+    let mut done = 0;
+    while done < spp {
+        let n = 64.min(spp - done);
+        r.render_frame(n);
+        done += n;
+    }
+    means(r.accum())
+}
+
+/// Seed of the reference render: distinct from every test seed.
+const REFERENCE_SEED: u32 = 0x5eed_0001;
+
+/// Renders `strategy` progressively on one backend up to `max_spp`,
+/// measuring the error at every power-of-two sample count from 4 on.
+/// Time is wall clock around synchronised frames; readback and metric
+/// evaluation are outside it.
+#[allow(clippy::too_many_arguments)]
+fn curve(
+    ctx: Option<&GpuContext>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    strategy: &Strategy,
+    seed: u32,
+    max_spp: u32,
+    reference: &[[f32; 3]],
+    backend: &str,
+) -> Result<Vec<Point>> {
+    let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
+    params.flags = strategy.flags;
+    params.rr_start = strategy.rr_start;
+    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    enum R {
+        Gpu(Box<GpuRenderer>),
+        Cpu(Box<CpuRenderer>),
+    }
+    let mut r = match ctx {
+        Some(c) => R::Gpu(Box::new(GpuRenderer::new(c, params, &walls, &spheres)?)),
+        None => R::Cpu(Box::new(CpuRenderer::new(params, &walls, &spheres))),
+    };
+    let mut points = Vec::new();
+    let (mut done, mut next, mut time) = (0u32, 4u32, 0.0f64);
+    while done < max_spp {
+        let start = Instant::now();
+        while done < next {
+            let n = strategy.spp_per_frame.min(next - done);
+            match &mut r {
+                R::Gpu(g) => g.submit_frame(n),
+                R::Cpu(c) => c.render_frame(n),
+            }
+            done += n;
+        }
+        if let Some(c) = ctx {
+            c.wait()?;
+        }
+        time += start.elapsed().as_secs_f64();
+        let accum = match (&r, ctx) {
+            (R::Gpu(g), Some(c)) => g.read_accum(c)?,
+            (R::Cpu(c), _) => c.accum().to_vec(),
+            _ => unreachable!("a GPU renderer has a context"),
+        };
+        let img = means(&accum);
+        points.push(Point {
+            backend: backend.to_string(),
+            strategy: strategy.name.to_string(),
+            seed,
+            spp: done,
+            time,
+            rel_mse: metrics::rel_mse(&img, reference),
+            mape: metrics::mape(&img, reference),
+            rmse: metrics::rmse(&img, reference),
+        });
+        next *= 2;
+    }
+    Ok(points)
+}
+
+/// Convergence curves of every strategy on each backend, `seeds` seeds each.
+pub fn convergence(
+    ctx: Option<&GpuContext>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    max_spp: u32,
+    seeds: u32,
+    reference: &[[f32; 3]],
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Point>> {
+    let mut points = Vec::new();
+    let mut backends: Vec<(Option<&GpuContext>, String)> = Vec::new();
+    if let Some(c) = ctx {
+        backends.push((Some(c), format!("GPU: {}", c.adapter_info.name)));
+    }
+    backends.push((None, format!("CPU: {} threads", rayon::current_num_threads())));
+    for (c, name) in &backends {
+        for st in &STRATEGIES {
+            progress(&format!("{name}: {}", st.name));
+            for seed in 0..seeds {
+                points.extend(curve(*c, scene, settings, st, 100 + seed, max_spp, reference, name)?);
+            }
+        }
+    }
+    Ok(points)
+}
+
+/// Mean over seeds of (time, relMSE) at each sample count of a curve.
+pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<(f64, f64, f64, f64)> {
+    let mut spps: Vec<u32> =
+        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.spp).collect();
+    spps.sort_unstable();
+    spps.dedup();
+    spps.iter()
+        .map(|&spp| {
+            let sel: Vec<&Point> =
+                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.spp == spp).collect();
+            let n = sel.len() as f64;
+            let t = sel.iter().map(|p| p.time).sum::<f64>() / n;
+            let e = sel.iter().map(|p| p.rel_mse).sum::<f64>() / n;
+            let (lo, hi) = sel.iter().fold((f64::MAX, 0.0f64), |(lo, hi), p| (lo.min(p.rel_mse), hi.max(p.rel_mse)));
+            (t, e, lo, hi)
+        })
+        .collect()
+}
+
+/// log-log interpolation of relMSE at time `t` along a mean curve.
+fn rel_mse_at(curve: &[(f64, f64, f64, f64)], t: f64) -> Option<f64> {
+    curve.windows(2).find(|w| w[0].0 <= t && t <= w[1].0).map(|w| {
+        let f = (t.ln() - w[0].0.ln()) / (w[1].0.ln() - w[0].0.ln());
+        (w[0].1.ln() + f * (w[1].1.ln() - w[0].1.ln())).exp()
+    })
+}
+
+/// log-log interpolation of the time at which relMSE reaches `target`.
+fn time_to(curve: &[(f64, f64, f64, f64)], target: f64) -> Option<f64> {
+    curve.windows(2).find(|w| w[0].1 >= target && w[1].1 <= target).map(|w| {
+        let f = (target.ln() - w[0].1.ln()) / (w[1].1.ln() - w[0].1.ln());
+        (w[0].0.ln() + f * (w[1].0.ln() - w[0].0.ln())).exp()
+    })
+}
+
+/// The convergence table in markdown, per backend, with the fastest
+/// strategy to relMSE `target` named.
+pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels: u64) -> String {
+    let mut s = String::new();
+    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
+    backends.dedup();
+    for b in &backends {
+        let curves: Vec<_> = STRATEGIES.iter().map(|st| (st, mean_curve(points, b, st.name))).collect();
+        // Equal time: the shortest total time of any strategy.
+        let t_eq = curves.iter().map(|(_, c)| c.last().map_or(f64::MAX, |l| l.0)).fold(f64::MAX, f64::min);
+        let base_time = time_to(&curves[0].1, target);
+        let _ = writeln!(
+            s,
+            "
+### {b}
+"
+        );
+        let _ = writeln!(
+            s,
+            "| strategy | samples/s | relMSE at {t_eq:.3} s | relMSE x time at {max_spp} spp | time to relMSE {target:.0e} | speed-up vs default |
+|---|---|---|---|---|---|"
+        );
+        let mut best: Option<(&str, f64)> = None;
+        for (st, c) in &curves {
+            let Some(last) = c.last() else { continue };
+            let sps = pixels as f64 * max_spp as f64 / last.0;
+            let at = rel_mse_at(c, t_eq).or_else(|| (c[0].0 >= t_eq).then_some(c[0].1));
+            let tt = time_to(c, target);
+            if let Some(t) = tt
+                && best.is_none_or(|(_, bt)| t < bt)
+            {
+                best = Some((st.name, t));
+            }
+            let _ = writeln!(
+                s,
+                "| {} | {:.3e} | {} | {:.3e} | {} | {} |",
+                st.name,
+                sps,
+                at.map_or("-".into(), |v| format!("{v:.3e}")),
+                last.1 * last.0,
+                tt.map_or(format!("> {:.2} s", last.0), |t| format!("{t:.3} s")),
+                match (tt, base_time) {
+                    (Some(t), Some(b)) => format!("{:.2}x", b / t),
+                    _ => "-".into(),
+                }
+            );
+        }
+        if let Some((name, t)) = best {
+            let _ = writeln!(
+                s,
+                "
+Fastest to relMSE {target:.0e} on this backend: **{name}** ({t:.3} s)."
+            );
+        }
+    }
+    s
+}
+
+/// Writes all points as CSV.
+pub fn write_csv(path: &Path, points: &[Point]) -> Result<()> {
+    let mut s = String::from(
+        "backend,strategy,seed,spp,time_s,rel_mse,mape,rmse
+",
+    );
+    for p in points {
+        let _ = writeln!(
+            s,
+            "\"{}\",\"{}\",{},{},{:.6},{:.6e},{:.6e},{:.6e}",
+            p.backend, p.strategy, p.seed, p.spp, p.time, p.rel_mse, p.mape, p.rmse
+        );
+    }
+    std::fs::write(path, s).with_context(|| format!("{}: cannot write the CSV", path.display()))
+}
+
+/// Draws relMSE against time, log-log, one line per backend and strategy
+/// (mean over seeds), plus optional extra curves (e.g. Mitsuba).
+pub fn plot(path: &Path, points: &[Point], extra: &[(String, Vec<(f64, f64)>)]) -> Result<()> {
+    use plotters::prelude::*;
+    plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT)
+        .map_err(|_| anyhow::anyhow!("cannot load the plot font"))?;
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
+    backends.dedup();
+    for b in &backends {
+        for st in &STRATEGIES {
+            let c = mean_curve(points, b, st.name);
+            let short = if b.starts_with("GPU") { "GPU" } else { "CPU" };
+            series.push((format!("{short}: {}", st.name), c.iter().map(|p| (p.0, p.1)).collect()));
+        }
+    }
+    series.extend(extra.iter().cloned());
+    let all = series.iter().flat_map(|s| s.1.iter());
+    let (t0, t1, e0, e1) = all
+        .fold((f64::MAX, 0.0f64, f64::MAX, 0.0f64), |(a, b, c, d), p| (a.min(p.0), b.max(p.0), c.min(p.1), d.max(p.1)));
+    let root = BitMapBackend::new(path, (1100, 750)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("relMSE against time (mean of seeds), default scene", ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((t0 * 0.8..t1 * 1.25).log_scale(), (e0 * 0.8..e1 * 1.25).log_scale())?;
+    chart.configure_mesh().x_desc("seconds").y_desc("relMSE").label_style(("sans-serif", 15)).draw()?;
+    for (i, (name, pts)) in series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let style = if name.starts_with("CPU") { color.stroke_width(2) } else { color.stroke_width(3) };
+        chart
+            .draw_series(LineSeries::new(pts.iter().copied(), style))?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// Reads a CSV of `time_s,rel_mse` lines (with a header), as the Mitsuba
+/// comparison script writes.
+pub fn read_curve(path: &PathBuf) -> Result<Vec<(f64, f64)>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let mut f = line.split(',');
+        let (Some(t), Some(e)) = (f.next(), f.next()) else {
+            anyhow::bail!("{}:{}: expected time_s,rel_mse", path.display(), i + 1)
+        };
+        out.push((
+            t.trim().parse().with_context(|| format!("{}:{}: time_s", path.display(), i + 1))?,
+            e.trim().parse().with_context(|| format!("{}:{}: rel_mse", path.display(), i + 1))?,
+        ));
+    }
+    Ok(out)
+}
+
+/// Reads a reference EXR and checks its size.
+pub fn load_reference(path: &Path, settings: &RenderSettings) -> Result<Vec<[f32; 3]>> {
+    let (w, h, px) =
+        output::read_exr(path).with_context(|| format!("{}: cannot read the reference", path.display()))?;
+    if (w, h) != (settings.width, settings.height) {
+        anyhow::bail!(
+            "{}: the reference is {w}x{h}, the benchmark renders {}x{}",
+            path.display(),
+            settings.width,
+            settings.height
+        );
+    }
+    Ok(px)
+}
