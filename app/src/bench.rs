@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pt_core::params::{FLAG_NEE, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_NEE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer};
 use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
@@ -190,15 +190,23 @@ pub struct Strategy {
     pub spp_per_frame: u32,
 }
 
-/// The strategies compared; the first is the default configuration.
-pub const STRATEGIES: [Strategy; 7] = [
-    Strategy { name: "default: NEE+MIS, RR from 3, 4 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 4 },
-    Strategy { name: "NEE+MIS, RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 4 },
-    Strategy { name: "NEE+MIS, no RR", flags: FLAGS_DEFAULT, rr_start: 1_000_000, spp_per_frame: 4 },
-    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE, rr_start: 3, spp_per_frame: 4 },
-    Strategy { name: "BSDF sampling only (no NEE)", flags: 0, rr_start: 3, spp_per_frame: 4 },
-    Strategy { name: "NEE+MIS, RR from 3, 1 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 1 },
-    Strategy { name: "NEE+MIS, RR from 3, 16 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
+/// The strategies compared; the first is the default configuration
+/// (`FLAGS_DEFAULT`, RR from 3, `render`'s 16 spp per frame), each other
+/// changes one thing.
+pub const STRATEGIES: [Strategy; 8] = [
+    Strategy {
+        name: "default: Sobol, NEE+MIS, RR from 3, 16 spp/frame",
+        flags: FLAGS_DEFAULT,
+        rr_start: 3,
+        spp_per_frame: 16,
+    },
+    Strategy { name: "independent samples (PCG)", flags: FLAGS_DEFAULT & !FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
+    Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 16 },
+    Strategy { name: "no RR", flags: FLAGS_DEFAULT, rr_start: 1_000_000, spp_per_frame: 16 },
+    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE | FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
+    Strategy { name: "BSDF sampling only (no NEE)", flags: FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
+    Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 4 },
+    Strategy { name: "1 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 1 },
 ];
 
 /// One point of a convergence curve.

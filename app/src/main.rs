@@ -191,8 +191,9 @@ struct RenderArgs {
     /// Output file: .png (exposure, tone map, sRGB) or .exr (linear mean radiance).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
-    /// Samples per pixel per frame (one GPU dispatch each).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Samples per pixel per frame (one GPU dispatch each); 16 was fastest
+    /// to a given error in `pathtracer bench` (docs/PERFORMANCE.md).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     spp_per_frame: u32,
     /// Exposure in stops, PNG only.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -200,6 +201,17 @@ struct RenderArgs {
     /// Tone mapper, PNG only.
     #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
     tonemap: TonemapArg,
+    /// Where the random numbers come from.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
+    sampler: SamplerArg,
+}
+
+#[derive(Copy, Clone, Debug, ValueEnum)]
+enum SamplerArg {
+    /// Owen-scrambled Sobol points (Burley 2020), padded per dimension pair.
+    Sobol,
+    /// Independent PCG streams.
+    Independent,
 }
 
 impl Default for RenderArgs {
@@ -275,7 +287,11 @@ fn render(args: &RenderArgs) -> Result<()> {
         TonemapArg::Aces => TONEMAP_ACES,
         TonemapArg::Clamp => TONEMAP_CLAMP,
     };
-    let params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
+    let mut params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
+    match args.sampler {
+        SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
+        SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
+    }
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut renderer = match args.backend {
         BackendArg::Gpu => {

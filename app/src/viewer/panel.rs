@@ -2,7 +2,7 @@
 
 use egui::{Color32, RichText, Ui};
 use pt_core::glam::Vec3;
-use pt_core::params::{FLAG_MIS, FLAG_NEE, TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
 
 use super::settings::{SamplesPerFrame, ViewSettings};
 
@@ -164,7 +164,10 @@ fn render(ui: &mut Ui, s: &mut ViewSettings, actions: &mut Actions) {
             let mut mis = s.flags & FLAG_MIS != 0;
             ui.checkbox(&mut nee, "light sampling (NEE)");
             ui.add_enabled(nee, egui::Checkbox::new(&mut mis, "MIS"));
-            s.flags = if nee { FLAG_NEE } else { 0 } | if mis { FLAG_MIS } else { 0 };
+            let mut sobol = s.flags & FLAG_SOBOL != 0;
+            ui.checkbox(&mut sobol, "Sobol");
+            s.flags =
+                if nee { FLAG_NEE } else { 0 } | if mis { FLAG_MIS } else { 0 } | if sobol { FLAG_SOBOL } else { 0 };
         });
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.paused, "pause");

@@ -5,9 +5,11 @@ use spirv_std::glam::Vec3;
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::light::light_cone;
+use crate::params::FLAG_SOBOL;
 use crate::params::{FLAG_MIS, FLAG_NEE, FrameParams};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
+use crate::sampler::{Sampler, SobolSampler};
 use crate::sampling::{PI, cosine_hemisphere, power_heuristic};
 use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point};
 use crate::wall::{Wall, intersect_wall};
@@ -147,17 +149,17 @@ impl RayCounter for RayCount {
 
 /// Radiance arriving along `ray`: one path sample, unbiased for
 /// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
-pub fn trace_path(ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut Rng) -> Vec3 {
+pub fn trace_path<S: Sampler>(ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut S) -> Vec3 {
     trace_path_counted(ray, params, walls, spheres, rng, &mut NoRayCount)
 }
 
 /// [`trace_path`], counting its rays in `rays`.
-pub fn trace_path_counted<C: RayCounter>(
+pub fn trace_path_counted<S: Sampler, C: RayCounter>(
     mut ray: Ray,
     params: &FrameParams,
     walls: &[Wall],
     spheres: &[Sphere],
-    rng: &mut Rng,
+    rng: &mut S,
     rays: &mut C,
 ) -> Vec3 {
     let nee = params.flags & FLAG_NEE != 0;
@@ -220,7 +222,8 @@ pub fn trace_path_counted<C: RayCounter>(
         let cone = light_cone(&light, origin);
         let cone_pdf = cone.pdf();
         if nee && !cone.is_empty() {
-            let (dir, dist) = cone.sample(rng.next_f32(), rng.next_f32());
+            let u = rng.next_2d();
+            let (dir, dist) = cone.sample(u.x, u.y);
             let cos = n.dot(dir);
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
@@ -235,7 +238,8 @@ pub fn trace_path_counted<C: RayCounter>(
         }
 
         // BSDF sampling: cosine-weighted, so f cos / pdf = albedo.
-        let dir = cosine_hemisphere(n, rng.next_f32(), rng.next_f32());
+        let u = rng.next_2d();
+        let dir = cosine_hemisphere(n, u.x, u.y);
         bsdf_pdf = n.dot(dir).max(0.0) * (1.0 / PI);
         nee_pdf = cone_pdf;
         throughput *= albedo;
@@ -245,7 +249,7 @@ pub fn trace_path_counted<C: RayCounter>(
         // throughput, and divide by it so the estimate stays unbiased.
         if bounces >= params.rr_start {
             let survive = throughput.max_element().clamp(RR_MIN_SURVIVAL, 1.0);
-            if rng.next_f32() >= survive {
+            if rng.next_1d() >= survive {
                 break;
             }
             throughput /= survive;
@@ -263,33 +267,57 @@ pub fn trace_path_counted<C: RayCounter>(
 pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> u64 {
     let mut count = RayCount::default();
     for s in 0..params.samples_per_frame {
-        let (ray, mut rng) = camera_sample(x, y, s, params);
-        trace_path_counted(ray, params, walls, spheres, &mut rng, &mut count);
+        if params.flags & FLAG_SOBOL != 0 {
+            let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
+            let ray = camera_ray(x, y, params, &mut sampler);
+            trace_path_counted(ray, params, walls, spheres, &mut sampler, &mut count);
+        } else {
+            let mut rng = Rng::new(x, y, params.frame, s, params.seed);
+            let ray = camera_ray(x, y, params, &mut rng);
+            trace_path_counted(ray, params, walls, spheres, &mut rng, &mut count);
+        }
     }
     count.0
 }
 
-/// The random stream and the primary ray of camera sample `s` of pixel
-/// (`x`, `y`) in this frame, jittered uniformly in the pixel (a box filter).
-pub fn camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> (Ray, Rng) {
-    let mut rng = Rng::new(x, y, params.frame, s, params.seed);
-    let fx = x as f32 + rng.next_f32();
-    let fy = y as f32 + rng.next_f32();
-    (params.camera.ray(fx, fy, params.width, params.height), rng)
+/// The primary ray of pixel (`x`, `y`), jittered uniformly in the pixel
+/// (a box filter) by the sampler's first pair.
+pub fn camera_ray<S: Sampler>(x: u32, y: u32, params: &FrameParams, sampler: &mut S) -> Ray {
+    let u = sampler.next_2d();
+    params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height)
 }
 
-/// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame` camera
-/// rays jittered uniformly in the pixel (a box filter), non-finite results
-/// counted and discarded.
+/// One camera sample of pixel (`x`, `y`): the radiance of one path.
+fn sample_pixel<S: Sampler>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    sampler: &mut S,
+) -> Vec3 {
+    let ray = camera_ray(x, y, params, sampler);
+    trace_path(ray, params, walls, spheres, sampler)
+}
+
+/// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`
+/// camera samples, from independent PCG streams or from the Owen-scrambled
+/// Sobol sequence (`FLAG_SOBOL`), non-finite results counted and discarded.
 pub fn render_pixel(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> PixelSamples {
     let mut out = PixelSamples::default();
     // Kahan compensation of the frame's sum: thousands of samples per frame
     // would otherwise drift (a sum of 65536 x 0.1 in f32 is off by 6e-4).
     let mut compensation = Vec3::ZERO;
+    let sobol = params.flags & FLAG_SOBOL != 0;
     let mut s = 0;
     while s < params.samples_per_frame {
-        let (ray, mut rng) = camera_sample(x, y, s, params);
-        let l = trace_path(ray, params, walls, spheres, &mut rng);
+        let l = if sobol {
+            let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
+            sample_pixel(x, y, params, walls, spheres, &mut sampler)
+        } else {
+            let mut rng = Rng::new(x, y, params.frame, s, params.seed);
+            sample_pixel(x, y, params, walls, spheres, &mut rng)
+        };
         if is_finite(l) {
             // width != 0 always; the compiler cannot know it (see kahan_add).
             kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);

@@ -13,6 +13,7 @@ pub mod light;
 pub mod params;
 pub mod ray;
 pub mod rng;
+pub mod sampler;
 pub mod sampling;
 pub mod sphere;
 pub mod tonemap;

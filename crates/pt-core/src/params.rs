@@ -12,8 +12,12 @@ pub const FLAG_NEE: u32 = 1;
 /// (power heuristic). Without it, light reached by BSDF rays is dropped
 /// while NEE is on.
 pub const FLAG_MIS: u32 = 2;
-/// The default: NEE with MIS.
-pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS;
+/// `flags` bit: samples from the Owen-scrambled Sobol sequence instead of
+/// independent PCG streams.
+pub const FLAG_SOBOL: u32 = 4;
+/// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
+/// with MIS, on Owen-scrambled Sobol samples.
+pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS | FLAG_SOBOL;
 
 /// `tonemap`: clamp to [0, 1] (no curve).
 pub const TONEMAP_CLAMP: u32 = 0;
@@ -56,6 +60,7 @@ pub struct FrameParams {
     pub tonemap: u32,
     /// Integrator switches (`FLAG_*`).
     pub flags: u32,
-    /// Padding to a 16-byte multiple.
-    pub _pad: u32,
+    /// Samples per pixel accumulated before this frame: the Sobol index of
+    /// this frame's first sample.
+    pub sample_offset: u32,
 }

@@ -12,6 +12,8 @@ pub struct CpuRenderer {
     spheres: Vec<Sphere>,
     accum: Vec<AccumPixel>,
     next_frame: u32,
+    /// Samples per pixel accumulated so far (Sobol index).
+    samples_done: u32,
 }
 
 impl CpuRenderer {
@@ -24,6 +26,7 @@ impl CpuRenderer {
             spheres: spheres.to_vec(),
             accum: vec![AccumPixel::default(); pixels],
             next_frame: 0,
+            samples_done: 0,
         }
     }
 
@@ -37,6 +40,8 @@ impl CpuRenderer {
     pub fn render_frame(&mut self, samples: u32) {
         self.params.frame = self.next_frame;
         self.params.samples_per_frame = samples;
+        self.params.sample_offset = self.samples_done;
+        self.samples_done = self.samples_done.saturating_add(samples);
         let params = self.params;
         let (walls, spheres) = (&self.walls[..], &self.spheres[..]);
         let width = params.width as usize;

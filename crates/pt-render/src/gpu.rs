@@ -57,6 +57,8 @@ pub struct GpuContext {
     adapter: wgpu::Adapter,
     /// Set by the device-lost callback or the uncaptured-error handler.
     failure: Arc<Mutex<Option<String>>>,
+    /// The kernel's pipelines, compiled on first use.
+    kernel: std::sync::OnceLock<Kernel>,
 }
 
 /// Preference among adapter types: a real GPU first, the software driver
@@ -114,7 +116,11 @@ impl GpuContext {
                 f.get_or_insert(e.to_string());
             }
         }));
-        Ok(Self { device, queue, adapter_info, adapter, failure })
+        Ok(Self { device, queue, adapter_info, adapter, failure, kernel: Default::default() })
+    }
+
+    fn kernel(&self) -> &Kernel {
+        self.kernel.get_or_init(|| Kernel::new(&self.device))
     }
 
     /// The adapter (surface capabilities are asked of it).
@@ -172,6 +178,50 @@ impl GpuContext {
     }
 }
 
+/// The compiled compute pipelines and their layouts, made once per device:
+/// compiling them is the slow part of a renderer's creation (hundreds of
+/// milliseconds on lavapipe), and renderers come and go (seeds, resizes).
+#[derive(Clone)]
+struct Kernel {
+    trace_layout: wgpu::BindGroupLayout,
+    display_layout: wgpu::BindGroupLayout,
+    accumulate: wgpu::ComputePipeline,
+    display: wgpu::ComputePipeline,
+}
+
+impl Kernel {
+    fn new(device: &wgpu::Device) -> Self {
+        let module = kernel_module(device);
+        // wgpu matches storage access exactly, and the accumulation buffer is
+        // read-write for `accumulate` but read-only for `display`: one
+        // layout per entry point, each with the bindings it uses.
+        let trace_layout = bind_group_layout(
+            device,
+            "accumulate",
+            &[storage_entry(1, true), storage_entry(2, true), storage_entry(3, false), storage_entry(5, false)],
+        );
+        let display_layout = bind_group_layout(device, "display", &[storage_entry(3, true), storage_entry(4, false)]);
+        let pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(entry),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let accumulate = pipeline("accumulate", &trace_layout);
+        let display = pipeline("display", &display_layout);
+        Self { trace_layout, display_layout, accumulate, display }
+    }
+}
+
 /// The kernel module. naga's SPIR-V front end reads what rust-gpu emits for
 /// this kernel, so wgpu validates it like any shader: no passthrough, no
 /// unchecked module.
@@ -202,6 +252,8 @@ pub struct GpuRenderer {
     params: FrameParams,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
+    /// Samples per pixel accumulated since the last reset (Sobol index).
+    samples_done: u32,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -264,34 +316,7 @@ impl GpuRenderer {
     pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
         let device = ctx.device.clone();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = kernel_module(&device);
-
-        // wgpu matches storage access exactly, and the accumulation buffer is
-        // read-write for `accumulate` but read-only for `display`: one
-        // layout per entry point, each with the bindings it uses.
-        let trace_layout = bind_group_layout(
-            &device,
-            "accumulate",
-            &[storage_entry(1, true), storage_entry(2, true), storage_entry(3, false), storage_entry(5, false)],
-        );
-        let display_layout = bind_group_layout(&device, "display", &[storage_entry(3, true), storage_entry(4, false)]);
-        let pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
-                bind_group_layouts: &[Some(layout)],
-                immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let accumulate = pipeline("accumulate", &trace_layout);
-        let display = pipeline("display", &display_layout);
+        let Kernel { trace_layout, display_layout, accumulate, display } = ctx.kernel().clone();
 
         let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
@@ -334,6 +359,7 @@ impl GpuRenderer {
             display_group,
             params,
             next_frame: 0,
+            samples_done: 0,
         })
     }
 
@@ -375,6 +401,7 @@ impl GpuRenderer {
             self.display_buf = display;
             self.rebind();
             self.next_frame = 0;
+            self.samples_done = 0;
         }
         self.params = params;
         Ok(())
@@ -415,6 +442,7 @@ impl GpuRenderer {
         encoder.clear_buffer(&self.non_finite_buf, 0, None);
         self.queue.submit([encoder.finish()]);
         self.next_frame = 0;
+        self.samples_done = 0;
     }
 
     /// Frames accumulated since the last reset.
@@ -437,6 +465,8 @@ impl GpuRenderer {
     pub fn submit_frame_timed(&mut self, samples: u32, timer: Option<&GpuTimer>) {
         self.params.frame = self.next_frame;
         self.params.samples_per_frame = samples;
+        self.params.sample_offset = self.samples_done;
+        self.samples_done = self.samples_done.saturating_add(samples);
         self.write_params();
         let mut encoder = self.device.create_command_encoder(&Default::default());
         self.encode_accumulate(&mut encoder, timer.map(GpuTimer::pass_writes));

@@ -255,7 +255,7 @@ impl Scene {
             sphere_count: self.spheres.len() as u32,
             tonemap: TONEMAP_ACES,
             flags: FLAGS_DEFAULT,
-            _pad: 0,
+            sample_offset: 0,
         }
     }
 

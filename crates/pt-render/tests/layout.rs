@@ -78,7 +78,7 @@ fn frame_params_match_the_uniform_block() {
             sphere_count,
             tonemap,
             flags,
-            _pad
+            sample_offset
         })
     );
     assert_eq!(

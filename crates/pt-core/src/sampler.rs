@@ -1,0 +1,243 @@
+//! Sample generators for the path loop: independent PCG numbers, or
+//! Owen-scrambled Sobol points (Burley, "Practical Hash-based Owen
+//! Scrambling", JCGT 9(4), 2020).
+//!
+//! The Sobol sampler is "padded 2D": every pair of dimensions the path asks
+//! for (pixel jitter, then per bounce the light sample and the BSDF sample)
+//! is the 2D Sobol (0,2)-sequence, at the pixel's sample index, shuffled and
+//! Owen-scrambled with seeds hashed from the pixel, the user seed and the
+//! pair number. Each pair is then stratified at every power-of-two sample
+//! count, and pairs are decorrelated from each other and across pixels.
+
+use spirv_std::glam::Vec2;
+
+use crate::rng::{Rng, pcg_hash};
+
+/// What the path loop draws its random numbers from.
+pub trait Sampler {
+    /// The next number in [0, 1).
+    fn next_1d(&mut self) -> f32;
+    /// The next pair of numbers in [0, 1)^2.
+    fn next_2d(&mut self) -> Vec2;
+}
+
+impl Sampler for Rng {
+    fn next_1d(&mut self) -> f32 {
+        self.next_f32()
+    }
+
+    fn next_2d(&mut self) -> Vec2 {
+        let u = self.next_f32();
+        Vec2::new(u, self.next_f32())
+    }
+}
+
+/// Burley's (2020) improvement of the Laine-Karras hash: a permutation of
+/// u32 where each bit depends only on the bits below it.
+pub fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// Nested uniform (Owen) scrambling of a 32-bit fraction (Burley 2020).
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// The first two Sobol dimensions at `index`, as 32-bit fractions:
+/// van der Corput, and the dimension with direction numbers v_i = v_{i-1}
+/// xor (v_{i-1} >> 1), v_0 = 2^31 (Joe and Kuo's first polynomial).
+pub fn sobol_2d(index: u32) -> (u32, u32) {
+    let mut y = 0u32;
+    let mut v = 1u32 << 31;
+    let mut i = index;
+    while i != 0 {
+        if i & 1 != 0 {
+            y ^= v;
+        }
+        i >>= 1;
+        v ^= v >> 1;
+    }
+    (index.reverse_bits(), y)
+}
+
+/// The second Sobol dimension at `index`, bit-reversed: the same as
+/// `sobol_2d(index).1.reverse_bits()`, without a loop.
+///
+/// Reversed, its direction numbers are v_k = (1 + x)^k over GF(2), whose
+/// coefficient j is 1 exactly when j is a submask of k (Lucas). So bit j of
+/// the result is the xor of the index bits k that are supermasks of j: a
+/// superset-sum transform, five shift-and-mask steps.
+pub fn sobol_dim1_reversed(index: u32) -> u32 {
+    let mut y = index;
+    y ^= (y >> 1) & 0x5555_5555;
+    y ^= (y >> 2) & 0x3333_3333;
+    y ^= (y >> 4) & 0x0f0f_0f0f;
+    y ^= (y >> 8) & 0x00ff_00ff;
+    y ^= (y >> 16) & 0x0000_ffff;
+    y
+}
+
+fn to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Padded 2D Owen-scrambled Sobol samples for one camera sample.
+#[derive(Copy, Clone, Debug)]
+pub struct SobolSampler {
+    /// Index of this sample among the pixel's samples (across frames),
+    /// bit-reversed once for all draws.
+    index_reversed: u32,
+    /// Hash of pixel and user seed.
+    seed: u32,
+    /// Next dimension pair.
+    pair: u32,
+}
+
+impl SobolSampler {
+    /// The sampler of sample `index` of pixel (`x`, `y`) for `seed`.
+    pub fn new(x: u32, y: u32, index: u32, seed: u32) -> Self {
+        Self {
+            index_reversed: index.reverse_bits(),
+            seed: pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed)))),
+            pair: 0,
+        }
+    }
+}
+
+impl SobolSampler {
+    /// The seed of the next dimension (pair): one hash per draw.
+    fn next_seed(&mut self) -> u32 {
+        self.pair += 1;
+        pcg_hash(self.seed ^ self.pair.wrapping_mul(0x9e37_79b9))
+    }
+
+    /// The sample index Owen-scrambled with `seed` (Burley's shuffle).
+    fn shuffled_index(&self, seed: u32) -> u32 {
+        laine_karras_permutation(self.index_reversed, seed).reverse_bits()
+    }
+}
+
+impl Sampler for SobolSampler {
+    fn next_1d(&mut self) -> f32 {
+        // One dimension: the Owen-scrambled van der Corput sequence at the
+        // shuffled index.
+        let seed = self.next_seed();
+        // scramble(reverse(i)) = reverse(LK(i)): one bit reversal saved.
+        to_unit(laine_karras_permutation(self.shuffled_index(seed), seed ^ 0xa511_e9b3).reverse_bits())
+    }
+
+    fn next_2d(&mut self) -> Vec2 {
+        let seed = self.next_seed();
+        // Shuffle the index (Burley's padding), then scramble each value
+        // with its own seed (derived without another hash: the
+        // Laine-Karras permutation mixes any seed difference).
+        let i = self.shuffled_index(seed);
+        // Dimension 0 is reverse(i), so its scramble is reverse(LK(i));
+        // dimension 1 is built bit-reversed for the same saving.
+        let a = laine_karras_permutation(i, seed ^ 0xa511_e9b3).reverse_bits();
+        let b = laine_karras_permutation(sobol_dim1_reversed(i), seed.wrapping_mul(0x2c1b_3c6d) ^ 0x297a_2d39)
+            .reverse_bits();
+        Vec2::new(to_unit(a), to_unit(b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether the points fill every elementary interval of area 1/n of
+    /// every shape (2^k x 2^(m-k)) with exactly one point: the (0, m, 2)-net
+    /// property of the first n = 2^m points.
+    fn is_02_net(points: &[(u32, u32)], m: u32) -> bool {
+        (0..=m).all(|k| {
+            let mut seen = vec![false; 1 << m];
+            // The top `bits` bits of a 32-bit fraction.
+            let top = |v: u32, bits: u32| if bits == 0 { 0 } else { (v >> (32 - bits)) as usize };
+            points.iter().all(|&(a, b)| {
+                let cell = (top(a, k) << (m - k)) | top(b, m - k);
+                !std::mem::replace(&mut seen[cell], true)
+            })
+        })
+    }
+
+    #[test]
+    fn sobol_2d_is_a_02_sequence() {
+        let pts: Vec<_> = (0..256).map(sobol_2d).collect();
+        for m in 0..=8 {
+            for start in (0..256).step_by(1 << m) {
+                assert!(is_02_net(&pts[start..start + (1 << m)], m), "m {m} start {start}");
+            }
+        }
+        assert_eq!(sobol_2d(1), (1 << 31, 1 << 31));
+        assert_eq!(sobol_2d(2), (1 << 30, 3 << 30));
+    }
+
+    #[test]
+    fn owen_scrambling_keeps_the_net_property() {
+        // Scrambling the values (not the index) keeps each block a (0,m,2)-net.
+        for seed in [1u32, 77, 0xdead_beef] {
+            let pts: Vec<_> = (0..128)
+                .map(|i| {
+                    let (a, b) = sobol_2d(i);
+                    (nested_uniform_scramble(a, seed), nested_uniform_scramble(b, seed ^ 5))
+                })
+                .collect();
+            assert!(is_02_net(&pts, 7), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn shuffled_index_permutes_each_power_of_two_block() {
+        // Owen-scrambling the index maps the first 2^m indices to numbers
+        // whose low m bits are a permutation of 0..2^m; the Sobol matrices
+        // are triangular, so the first m bits of the points (the strata at
+        // 2^m samples) depend on those bits only: stratification is kept.
+        let seed = 12345;
+        let mut v: Vec<u32> = (0..64).map(|i| nested_uniform_scramble(i, seed) & 63).collect();
+        v.sort_unstable();
+        assert_eq!(v, (0..64).collect::<Vec<_>>());
+        // And the shuffled, scrambled points of a block still form a net.
+        let pts: Vec<_> = (0..64).map(|i| sobol_2d(nested_uniform_scramble(i, seed))).collect();
+        assert!(is_02_net(&pts, 6));
+    }
+
+    #[test]
+    fn reversed_dimension_1_matches() {
+        for i in [0u32, 1, 2, 3, 77, 1023, 0xdead_beef, u32::MAX] {
+            assert_eq!(sobol_dim1_reversed(i), sobol_2d(i).1.reverse_bits());
+        }
+    }
+
+    #[test]
+    fn sampler_pairs_are_stratified_over_a_pixels_samples() {
+        // The first 256 samples of a pixel: each dimension pair is a
+        // (0, 8, 2)-net at 24-bit resolution.
+        for pair in 0..4 {
+            let pts: Vec<(u32, u32)> = (0..256)
+                .map(|i| {
+                    let mut s = SobolSampler::new(7, 9, i, 3);
+                    for _ in 0..pair {
+                        s.next_2d();
+                    }
+                    let u = s.next_2d();
+                    (((u.x * 16_777_216.0) as u32) << 8, ((u.y * 16_777_216.0) as u32) << 8)
+                })
+                .collect();
+            assert!(is_02_net(&pts, 8), "pair {pair}");
+        }
+    }
+
+    #[test]
+    fn sampler_values_are_in_unit_square_and_pairs_differ() {
+        let mut s = SobolSampler::new(3, 4, 5, 6);
+        let a = s.next_2d();
+        let b = s.next_2d();
+        assert!(a.x >= 0.0 && a.x < 1.0 && a.y >= 0.0 && a.y < 1.0);
+        assert_ne!(a, b);
+    }
+}
