@@ -13,6 +13,7 @@ use anyhow::{Context, Result};
 use pt_core::params::{FLAG_NEE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer};
+use pt_render::scene::DEFAULT_RR_START;
 use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
 use rayon::prelude::*;
 
@@ -97,7 +98,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
             height: cfg.height,
             spp: cfg.spp,
             max_bounces: cfg.bounces,
-            rr_start: 3,
+            rr_start: DEFAULT_RR_START,
         };
         let params = scene.frame_params(&settings, cfg.spp, 1);
         let rps = rays_per_sample(&params, scene);
@@ -191,22 +192,27 @@ pub struct Strategy {
 }
 
 /// The strategies compared; the first is the default configuration
-/// (`FLAGS_DEFAULT`, RR from 3, `render`'s 16 spp per frame), each other
-/// changes one thing.
+/// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `render`'s 16 spp per frame), each
+/// other changes one thing.
 pub const STRATEGIES: [Strategy; 8] = [
     Strategy {
-        name: "default: Sobol, NEE+MIS, RR from 3, 16 spp/frame",
+        name: "default: Sobol, NEE+MIS, RR from 5, 16 spp/frame",
         flags: FLAGS_DEFAULT,
-        rr_start: 3,
+        rr_start: DEFAULT_RR_START,
         spp_per_frame: 16,
     },
-    Strategy { name: "independent samples (PCG)", flags: FLAGS_DEFAULT & !FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
+    Strategy {
+        name: "independent samples (PCG)",
+        flags: FLAGS_DEFAULT & !FLAG_SOBOL,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 16,
+    },
+    Strategy { name: "RR from 3", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
     Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 16 },
-    Strategy { name: "no RR", flags: FLAGS_DEFAULT, rr_start: 1_000_000, spp_per_frame: 16 },
-    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE | FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
-    Strategy { name: "BSDF sampling only (no NEE)", flags: FLAG_SOBOL, rr_start: 3, spp_per_frame: 16 },
-    Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 4 },
-    Strategy { name: "1 spp/frame", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 1 },
+    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE | FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
+    Strategy { name: "BSDF sampling only (no NEE)", flags: FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
+    Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
+    Strategy { name: "1 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 1 },
 ];
 
 /// One point of a convergence curve.

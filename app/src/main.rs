@@ -555,8 +555,8 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
             args.seeds,
             reference_note,
             args.max_spp,
-            png.display(),
-            csv.display(),
+            relative_to_report(&png, args.report.as_deref()),
+            relative_to_report(&csv, args.report.as_deref()),
         ));
         if let Some(m) = &args.mitsuba_csv {
             report.push_str(&mitsuba_section(m, &points)?);
@@ -612,4 +612,13 @@ fn mitsuba_section(csv: &PathBuf, points: &[bench::Point]) -> Result<String> {
         ));
     }
     Ok(s)
+}
+
+/// `path` as seen from the folder of the report (for links in markdown).
+fn relative_to_report(path: &std::path::Path, report: Option<&std::path::Path>) -> String {
+    let dir = report.and_then(|r| r.parent()).filter(|d| !d.as_os_str().is_empty());
+    match dir.and_then(|d| path.strip_prefix(d).ok()) {
+        Some(rel) => rel.display().to_string(),
+        None => path.display().to_string(),
+    }
 }
