@@ -70,6 +70,21 @@ impl CaseResult {
         Self { case: case.into(), backend, expected, measured, stderr, tolerance, non_finite, pass }
     }
 
+    /// A chi-square test: the p-value must not fall below `alpha`, and
+    /// `also` must hold. `detail` goes into the case's name.
+    fn chi2(name: &str, detail: &str, r: &crate::stats::Chi2Result, alpha: f64, also: bool) -> Self {
+        Self {
+            case: format!("chi-square {name}: p-value (chi2 {:.1}, {} dof{detail}) >= {alpha:.2e}", r.chi2, r.dof),
+            backend: "core",
+            expected: 1.0,
+            measured: r.p_value,
+            stderr: 0.0,
+            tolerance: 1.0 - alpha,
+            non_finite: 0,
+            pass: r.p_value >= alpha && also,
+        }
+    }
+
     fn monte_carlo(case: impl Into<String>, backend: &'static str, expected: f64, m: &Measurement) -> Self {
         // A floor of f32 resolution for cases whose noise is zero.
         let tol = (Z_CRIT * m.stderr).max(1e-6 * expected.abs());
@@ -480,19 +495,31 @@ fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuEr
     for (name, change) in variants {
         let mut v = default_small();
         change(&mut v);
-        let (images, bad) = v.images(t, 100..100 + SEEDS)?;
-        let (z, tests) = largest_region_z(&ref_images, &images, 24, 24, 8);
-        out.push(CaseResult::new(
-            format!("same image with {name}: largest region |z| of {tests}"),
-            t.name(),
-            0.0,
-            z,
-            0.0,
-            REGION_Z_CRIT,
-            bad + bad0,
-        ));
+        out.push(same_image_case(t, &format!("same image with {name}"), (&ref_images, bad0), &v, 100)?);
     }
     Ok(())
+}
+
+/// The region z-test of `setup`'s images (seeds from `first_seed`) against
+/// the reference images of the small default scene.
+fn same_image_case(
+    t: &Target,
+    name: &str,
+    reference: (&[Image], u64),
+    setup: &Setup,
+    first_seed: u32,
+) -> Result<CaseResult, GpuError> {
+    let (images, bad) = setup.images(t, first_seed..first_seed + SEEDS)?;
+    let (z, tests) = largest_region_z(reference.0, &images, 24, 24, 8);
+    Ok(CaseResult::new(
+        format!("{name}: largest region |z| of {tests}"),
+        t.name(),
+        0.0,
+        z,
+        0.0,
+        REGION_Z_CRIT,
+        bad + reference.1,
+    ))
 }
 
 /// Scales and translates the default scene.
@@ -523,17 +550,7 @@ fn metamorphic(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
         ("scene moved by 1e3", transformed(1.0, Vec3::splat(1e3))),
     ] {
         let setup = Setup::new(scene, 24, 24, 16, 5);
-        let (images, bad) = setup.images(t, 200..200 + SEEDS)?;
-        let (z, tests) = largest_region_z(&ref_images, &images, 24, 24, 8);
-        out.push(CaseResult::new(
-            format!("same image with the {name}: largest region |z| of {tests}"),
-            t.name(),
-            0.0,
-            z,
-            0.0,
-            REGION_Z_CRIT,
-            bad + bad0,
-        ));
+        out.push(same_image_case(t, &format!("same image with the {name}"), (&ref_images, bad0), &setup, 200)?);
     }
     // Doubling the light doubles every sample exactly (same seed: the same
     // paths, and x2 is exact in floating point).
@@ -839,17 +856,7 @@ fn sampling(out: &mut Vec<CaseResult>) {
         }
         let expected = bins.expected(n, 8, pdf);
         let r = chi2_test(&observed, &expected);
-        // Reported as the p-value, which must not fall below alpha_each.
-        out.push(CaseResult {
-            case: format!("chi-square {name}: p-value (chi2 {:.1}, {} dof) >= {alpha_each:.2e}", r.chi2, r.dof),
-            backend: "core",
-            expected: 1.0,
-            measured: r.p_value,
-            stderr: 0.0,
-            tolerance: 1.0 - alpha_each,
-            non_finite: 0,
-            pass: r.p_value >= alpha_each,
-        });
+        out.push(CaseResult::chi2(&name, "", &r, alpha_each, true));
     };
     let normal = Vec3::new(0.3, -0.4, 0.866).normalize();
     let nd = normal.as_dvec3();
@@ -885,19 +892,8 @@ fn sampling(out: &mut Vec<CaseResult>) {
         }
         let outside = observed[nt * np];
         let r = chi2_test(&observed[..nt * np], &vec![n as f64 / (nt * np) as f64; nt * np]);
-        out.push(CaseResult {
-            case: format!(
-                "chi-square sphere light cone, sin(a)={sin_sigma}: p-value (chi2 {:.1}, {} dof, {outside} outside) >= {alpha_each:.2e}",
-                r.chi2, r.dof
-            ),
-            backend: "core",
-            expected: 1.0,
-            measured: r.p_value,
-            stderr: 0.0,
-            tolerance: 1.0 - alpha_each,
-            non_finite: 0,
-            pass: r.p_value >= alpha_each && outside == 0.0,
-        });
+        let name = format!("sphere light cone, sin(a)={sin_sigma}");
+        out.push(CaseResult::chi2(&name, &format!(", {outside} outside"), &r, alpha_each, outside == 0.0));
     }
     // The RNG: 1e6 floats in 1000 bins.
     let mut rng = Rng::new(1, 2, 3, 4, 5);
@@ -906,16 +902,7 @@ fn sampling(out: &mut Vec<CaseResult>) {
         obs[(rng.next_f32() * 1000.0) as usize] += 1.0;
     }
     let r = chi2_test(&obs, &vec![1000.0; 1000]);
-    out.push(CaseResult {
-        case: format!("chi-square RNG uniformity: p-value (chi2 {:.1}, {} dof) >= {alpha_each:.2e}", r.chi2, r.dof),
-        backend: "core",
-        expected: 1.0,
-        measured: r.p_value,
-        stderr: 0.0,
-        tolerance: 1.0 - alpha_each,
-        non_finite: 0,
-        pass: r.p_value >= alpha_each,
-    });
+    out.push(CaseResult::chi2("RNG uniformity", "", &r, alpha_each, true));
 
     // Densities integrate to one (midpoint rule in f64, 2000 x 2000 cells).
     let bins = SphereBins { nt: 200, np: 200 };
@@ -939,22 +926,9 @@ fn sampling(out: &mut Vec<CaseResult>) {
     // No correlation between neighbouring pixels or consecutive frames.
     for (name, dx, dframe) in [("neighbouring pixels", 1u32, 0u32), ("consecutive frames", 0, 1)] {
         let n = 200_000u32;
-        let (mut sa, mut sb, mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for i in 0..n {
-            let (x, y) = (i % 500, i / 500);
-            let a = Rng::new(x, y, 3, 0, 0).next_f32() as f64;
-            let b = Rng::new(x + dx, y, 3 + dframe, 0, 0).next_f32() as f64;
-            sa += a;
-            sb += b;
-            sab += a * b;
-            saa += a * a;
-            sbb += b * b;
-        }
-        let nf = n as f64;
-        let cov = sab / nf - sa * sb / (nf * nf);
-        let corr = cov / ((saa / nf - (sa / nf).powi(2)) * (sbb / nf - (sb / nf).powi(2))).sqrt();
+        let corr = pt_core::rng::stream_correlation(n, dx, dframe);
         // Under independence corr ~ N(0, 1/n).
-        let se = 1.0 / nf.sqrt();
+        let se = 1.0 / (n as f64).sqrt();
         out.push(CaseResult::new(format!("RNG correlation of {name}"), "core", 0.0, corr, se, Z_CRIT * se, 0));
     }
 }
