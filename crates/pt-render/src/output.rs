@@ -19,6 +19,18 @@ pub enum OutputError {
         /// What the OS said.
         source: std::io::Error,
     },
+    /// The pixel data does not match the image size.
+    #[error("{path}: {got} pixel values for a {width}x{height} image")]
+    Size {
+        /// The file.
+        path: PathBuf,
+        /// Width asked for.
+        width: u32,
+        /// Height asked for.
+        height: u32,
+        /// Values given.
+        got: usize,
+    },
     /// The encoder failed.
     #[error("{path}: cannot encode the image: {source}")]
     Encode {
@@ -84,7 +96,13 @@ fn write_atomic(path: &Path, save: impl FnOnce(&Path) -> Result<(), image::Image
 /// Writes packed RGBA8 display pixels (row 0 at the top) as PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u32]) -> Result<(), OutputError> {
     let bytes: Vec<u8> = bytemuck::cast_slice(rgba).to_vec();
-    let img = image::RgbaImage::from_raw(width, height, bytes).expect("one packed pixel per image pixel");
+    let got = rgba.len();
+    let img = image::RgbaImage::from_raw(width, height, bytes).ok_or(OutputError::Size {
+        path: path.to_owned(),
+        width,
+        height,
+        got,
+    })?;
     write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::Png))
 }
 
@@ -96,7 +114,13 @@ pub fn mean_radiance(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
 /// Writes linear mean radiance (row 0 at the top) as 32-bit float EXR.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), OutputError> {
     let data: Vec<f32> = rgb.iter().flatten().copied().collect();
-    let img = image::Rgb32FImage::from_raw(width, height, data).expect("one mean per image pixel");
+    let got = rgb.len();
+    let img = image::Rgb32FImage::from_raw(width, height, data).ok_or(OutputError::Size {
+        path: path.to_owned(),
+        width,
+        height,
+        got,
+    })?;
     write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::OpenExr))
 }
 
@@ -105,4 +129,34 @@ pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), image::ImageEr
     let img = image::open(path)?.into_rgb32f();
     let (w, h) = img.dimensions();
     Ok((w, h, img.pixels().map(|p| p.0).collect()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mismatched_pixel_count_is_an_error_and_writes_nothing() {
+        let dir = std::env::temp_dir().join(format!("pt-output-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("x.png");
+        assert!(matches!(write_png(&png, 4, 4, &[0; 15]), Err(OutputError::Size { got: 15, .. })));
+        let exr = dir.join("x.exr");
+        assert!(matches!(write_exr(&exr, 2, 2, &[[0.0; 3]; 3]), Err(OutputError::Size { got: 3, .. })));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "a file was left behind");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn exr_round_trips_linear_radiance() {
+        let dir = std::env::temp_dir().join(format!("pt-output-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("r.exr");
+        let px = [[0.25, 20.0, 1e-3], [0.0, 1.5, 7.0]];
+        write_exr(&path, 2, 1, &px).unwrap();
+        let (w, h, back) = read_exr(&path).unwrap();
+        assert_eq!((w, h), (2, 1));
+        assert_eq!(back, px.to_vec());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
