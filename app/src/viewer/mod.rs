@@ -494,7 +494,8 @@ impl Viewer {
         self.egui_state.handle_platform_output(&self.window, full_output.platform_output);
 
         self.handle_actions(&actions)?;
-        if self.settings.scene.validate().is_err() {
+        // Only edited scenes need the check (it writes and re-reads TOML).
+        if self.settings.scene != self.applied.scene && self.settings.scene.validate().is_err() {
             // A value the panel allowed but the kernel cannot trace (e.g. a
             // camera at its look-at point): keep the last good scene.
             self.settings.scene = self.applied.scene.clone();
