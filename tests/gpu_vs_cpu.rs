@@ -133,3 +133,26 @@ fn non_finite_samples_are_counted_and_discarded() {
     assert!(cpu.accum().iter().map(|p| p.non_finite).sum::<u32>() > 0);
     assert!(cpu.accum().iter().all(|p| p.mean().is_finite()));
 }
+
+/// Every workgroup shape computes the same pixels (same seed: the same
+/// samples), including the ragged right and bottom edges of an image whose
+/// size is no multiple of the shape.
+#[test]
+fn every_workgroup_shape_renders_the_same_image() {
+    let scene = Scene::default_scene();
+    let settings = RenderSettings { width: 37, height: 23, spp: 2, ..scene.render };
+    let ctx = gpu();
+    let render = |shape: usize| {
+        let mut r =
+            GpuRenderer::new(&ctx, scene.frame_params(&settings, 2, 9), &scene.gpu_walls(), &scene.gpu_spheres())
+                .unwrap();
+        r.set_workgroup_shape(&ctx, shape);
+        r.submit_frame(2);
+        r.read_accum(&ctx).unwrap()
+    };
+    let reference = render(0);
+    assert!(reference.iter().all(|p| p.samples == 2), "a pixel was not traced");
+    for shape in 1..pt_render::gpu::WORKGROUP_SHAPES.len() {
+        assert_eq!(render(shape), reference, "shape {:?}", pt_render::gpu::WORKGROUP_SHAPES[shape]);
+    }
+}

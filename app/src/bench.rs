@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use pt_core::params::{FLAG_NEE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
-use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer};
+use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
 use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
 use rayon::prelude::*;
@@ -104,22 +104,15 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
         let rps = rays_per_sample(&params, scene);
         let samples = cfg.width as f64 * cfg.height as f64 * cfg.spp as f64;
         if let Some(ctx) = ctx {
-            let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres())?;
-            let timer = if ctx.is_software() { None } else { GpuTimer::new(ctx) };
-            r.submit_frame(cfg.spp);
-            ctx.wait()?;
-            let mut times = Vec::new();
-            for _ in 0..reps {
-                let start = Instant::now();
-                r.submit_frame_timed(cfg.spp, timer.as_ref());
-                ctx.wait()?;
-                let wall = start.elapsed().as_secs_f64();
-                times.push(match &timer {
-                    Some(t) => t.read_ms(ctx)? * 1e-3,
-                    None => wall,
-                });
+            // Every workgroup shape on the first 512x512 configuration, the
+            // default shape (8x8) everywhere.
+            let shapes = if cfg.name == THROUGHPUT_CONFIGS[1].name { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
+            for shape in shapes {
+                let (times, timestamps) = time_gpu(ctx, params, scene, cfg.spp, reps, shape)?;
+                let (_, w, h) = WORKGROUP_SHAPES[shape];
+                let backend = format!("GPU: {}, workgroup {w}x{h}", ctx.adapter_info.name);
+                rows.push(row(cfg, backend, times, samples, rps, timestamps));
             }
-            rows.push(row(cfg, format!("GPU: {}", ctx.adapter_info.name), times, samples, rps, timer.is_some()));
         }
         let mut cpu = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
         cpu.render_frame(cfg.spp);
@@ -132,6 +125,36 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
         rows.push(row(cfg, format!("CPU: {} threads", rayon::current_num_threads()), times, samples, rps, false));
     }
     Ok(rows)
+}
+
+/// Seconds of `reps` frames on the GPU after a warm-up frame, with the
+/// `accumulate` entry point of `WORKGROUP_SHAPES[shape]`; and whether they
+/// come from timestamps.
+fn time_gpu(
+    ctx: &GpuContext,
+    params: FrameParams,
+    scene: &Scene,
+    spp: u32,
+    reps: usize,
+    shape: usize,
+) -> Result<(Vec<f64>, bool)> {
+    let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres())?;
+    r.set_workgroup_shape(ctx, shape);
+    let timer = if ctx.is_software() { None } else { GpuTimer::new(ctx) };
+    r.submit_frame(spp);
+    ctx.wait()?;
+    let mut times = Vec::new();
+    for _ in 0..reps {
+        let start = Instant::now();
+        r.submit_frame_timed(spp, timer.as_ref());
+        ctx.wait()?;
+        let wall = start.elapsed().as_secs_f64();
+        times.push(match &timer {
+            Some(t) => t.read_ms(ctx)? * 1e-3,
+            None => wall,
+        });
+    }
+    Ok((times, timer.is_some()))
 }
 
 fn row(

@@ -100,6 +100,9 @@ struct BenchArgs {
     /// A `time_s,rel_mse` CSV from scripts/mitsuba/compare.py to include.
     #[arg(long)]
     mitsuba_csv: Option<PathBuf>,
+    /// Only render the reference (to OUT_DIR/reference.exr) and stop.
+    #[arg(long)]
+    reference_only: bool,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -518,6 +521,10 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
                 r
             }
         };
+        if args.reference_only {
+            println!("wrote {}", args.out_dir.join("reference.exr").display());
+            return Ok(());
+        }
         let mut points = bench::convergence(gpu, &scene, &settings, args.max_spp, args.seeds, &reference, |s| {
             eprintln!("convergence: {s}")
         })?;

@@ -187,6 +187,30 @@ struct Kernel {
     display_layout: wgpu::BindGroupLayout,
     accumulate: wgpu::ComputePipeline,
     display: wgpu::ComputePipeline,
+    /// For the other workgroup shapes (benchmarks): compiled on demand.
+    module: wgpu::ShaderModule,
+    trace_pipeline_layout: wgpu::PipelineLayout,
+}
+
+/// The workgroup shapes the kernel has an `accumulate` entry point for:
+/// (entry point, width, height). The first is the default.
+pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] =
+    [("accumulate", 8, 8), ("accumulate_16x4", 16, 4), ("accumulate_32x2", 32, 2), ("accumulate_4x4", 4, 4)];
+
+fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
 }
 
 impl Kernel {
@@ -201,24 +225,17 @@ impl Kernel {
             &[storage_entry(1, true), storage_entry(2, true), storage_entry(3, false), storage_entry(5, false)],
         );
         let display_layout = bind_group_layout(device, "display", &[storage_entry(3, true), storage_entry(4, false)]);
-        let pipeline = |entry: &str, layout: &wgpu::BindGroupLayout| {
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(entry),
+        let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
                 bind_group_layouts: &[Some(layout)],
                 immediate_size: 0,
-            });
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
             })
         };
-        let accumulate = pipeline("accumulate", &trace_layout);
-        let display = pipeline("display", &display_layout);
-        Self { trace_layout, display_layout, accumulate, display }
+        let trace_pipeline_layout = pipeline_layout("accumulate", &trace_layout);
+        let accumulate = compute_pipeline(device, &module, &trace_pipeline_layout, "accumulate");
+        let display = compute_pipeline(device, &module, &pipeline_layout("display", &display_layout), "display");
+        Self { trace_layout, display_layout, accumulate, display, module, trace_pipeline_layout }
     }
 }
 
@@ -254,6 +271,8 @@ pub struct GpuRenderer {
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
     samples_done: u32,
+    /// Workgroup size of the `accumulate` pipeline in use.
+    trace_shape: (u32, u32),
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -316,7 +335,7 @@ impl GpuRenderer {
     pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
         let device = ctx.device.clone();
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let Kernel { trace_layout, display_layout, accumulate, display } = ctx.kernel().clone();
+        let Kernel { trace_layout, display_layout, accumulate, display, .. } = ctx.kernel().clone();
 
         let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
@@ -360,6 +379,7 @@ impl GpuRenderer {
             params,
             next_frame: 0,
             samples_done: 0,
+            trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
         })
     }
 
@@ -454,6 +474,15 @@ impl GpuRenderer {
         (self.params.width.div_ceil(WORKGROUP_SIZE), self.params.height.div_ceil(WORKGROUP_SIZE))
     }
 
+    /// Traces with the `accumulate` entry point of `WORKGROUP_SHAPES[shape]`
+    /// (compiled now; benchmarks compare the shapes).
+    pub fn set_workgroup_shape(&mut self, ctx: &GpuContext, shape: usize) {
+        let (entry, w, h) = WORKGROUP_SHAPES[shape];
+        let k = ctx.kernel();
+        self.accumulate = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry);
+        self.trace_shape = (w, h);
+    }
+
     /// Submits one frame of `samples` samples per pixel. Nothing waits: the
     /// queue orders this parameter write before the frame's dispatch.
     pub fn submit_frame(&mut self, samples: u32) {
@@ -493,7 +522,7 @@ impl GpuRenderer {
         encoder: &mut wgpu::CommandEncoder,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        let (x, y) = self.workgroups();
+        let (x, y) = (self.params.width.div_ceil(self.trace_shape.0), self.params.height.div_ceil(self.trace_shape.1));
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
         pass.set_pipeline(&self.accumulate);

@@ -11,16 +11,17 @@ use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
 
-/// Adds one frame of `samples_per_frame` samples to every pixel's sum, and
-/// counts the non-finite samples it discarded.
-#[spirv(compute(threads(8, 8)))]
-pub fn accumulate(
-    #[spirv(global_invocation_id)] id: UVec3,
-    #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] walls: &[Wall],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] spheres: &[Sphere],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] accum: &mut [AccumPixel],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] non_finite: &mut [u32],
+/// Adds one frame of `samples_per_frame` samples to pixel `id`'s sum, and
+/// counts the non-finite samples it discarded. The `accumulate*` entry
+/// points differ only in their workgroup shape (`pathtracer bench`
+/// compares them); `accumulate` (8 x 8) is the default.
+fn accumulate_pixel(
+    id: UVec3,
+    params: &FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    accum: &mut [AccumPixel],
+    non_finite: &mut [u32],
 ) {
     if id.x >= params.width || id.y >= params.height {
         return;
@@ -30,8 +31,9 @@ pub fn accumulate(
     accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
     if samples.non_finite > 0 {
-        // SAFETY: a queue-family-scope (all invocations of this dispatch and later ones) relaxed add on a u32 in a storage buffer;
-        // the counter is only read after the frame completes.
+        // SAFETY: a relaxed add on a u32 in a storage buffer, at queue-family
+        // scope (device scope needs a capability the Vulkan memory model
+        // lacks here); the counter is only read after the frame completes.
         unsafe {
             spirv_std::arch::atomic_i_add::<u32, { Scope::QueueFamily as u32 }, { Semantics::NONE.bits() }>(
                 &mut non_finite[0],
@@ -40,6 +42,28 @@ pub fn accumulate(
         }
     }
 }
+
+macro_rules! accumulate_entry {
+    ($name:ident, $x:literal, $y:literal) => {
+        /// [`accumulate_pixel`] in workgroups of this shape.
+        #[spirv(compute(threads($x, $y)))]
+        pub fn $name(
+            #[spirv(global_invocation_id)] id: UVec3,
+            #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] walls: &[Wall],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] spheres: &[Sphere],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] accum: &mut [AccumPixel],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] non_finite: &mut [u32],
+        ) {
+            accumulate_pixel(id, params, walls, spheres, accum, non_finite);
+        }
+    };
+}
+
+accumulate_entry!(accumulate, 8, 8);
+accumulate_entry!(accumulate_16x4, 16, 4);
+accumulate_entry!(accumulate_32x2, 32, 2);
+accumulate_entry!(accumulate_4x4, 4, 4);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
 #[spirv(compute(threads(8, 8)))]
