@@ -605,12 +605,15 @@ bounce 3 or 1 was slower to the target on both backends (its random cut-offs und
 Sobol's stratification); it stays for deeper bounce limits, where it bounds path length.\n\
 - 16 samples per pixel per frame for `render` (fewer dispatches: each lavapipe submission \
 has a fixed cost of several milliseconds); the viewer adapts its count to a frame budget.\n\
-- NEE with MIS is kept although NEE alone was as fast or slightly faster here: the default \
-light is small (sin a = 0.09 from the floor), where BSDF samples rarely hit it; MIS is what \
-keeps large or close lights from producing fireflies, and the difference on this scene is \
-within a few percent on the CPU.\n\
+- NEE with MIS is kept: NEE alone came within a few percent of it across runs (ahead in \
+some, behind in others): the default light is small (sin a = 0.09 from the floor), where \
+BSDF samples rarely hit it, and MIS is what keeps large or close lights from producing \
+fireflies.\n\
+- Workgroup shape: 8x8 stays the default. The throughput table times 16x4, 32x2 and 4x4 on \
+the 512x512 configuration; on lavapipe the shape only changes how invocations are batched \
+into its 8-wide SIMD, and a real GPU's answer may differ: measure there before changing it.\n\
 - Not compared in this report: the survival rule of roulette (one rule, \
-clamp(max throughput, 0.05, 1)) and the workgroup shape (8x8 only).\n\n\
+clamp(max throughput, 0.05, 1)).\n\n\
 ## NVIDIA H100 / H200\n\n\
 Not measured: no GPU machine was lent to the session that wrote this report. To measure, \
 run `pathtracer bench throughput --backend gpu` on such a machine (the kernel is embedded in \
