@@ -148,13 +148,9 @@ impl RayCounter for RayCount {
 }
 
 /// Radiance arriving along `ray`: one path sample, unbiased for
-/// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
-pub fn trace_path<S: Sampler>(ray: Ray, params: &FrameParams, walls: &[Wall], spheres: &[Sphere], rng: &mut S) -> Vec3 {
-    trace_path_counted(ray, params, walls, spheres, rng, &mut NoRayCount)
-}
-
-/// [`trace_path`], counting its rays in `rays`.
-pub fn trace_path_counted<S: Sampler, C: RayCounter>(
+/// `params.max_bounces` scattering events (DESIGN sections 4 and 5). Its
+/// rays are counted in `rays` ([`NoRayCount`] in the renderers).
+pub fn trace_path<S: Sampler, C: RayCounter>(
     mut ray: Ray,
     params: &FrameParams,
     walls: &[Wall],
@@ -267,15 +263,7 @@ pub fn trace_path_counted<S: Sampler, C: RayCounter>(
 pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> u64 {
     let mut count = RayCount::default();
     for s in 0..params.samples_per_frame {
-        if params.flags & FLAG_SOBOL != 0 {
-            let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
-            let ray = camera_ray(x, y, params, &mut sampler);
-            trace_path_counted(ray, params, walls, spheres, &mut sampler, &mut count);
-        } else {
-            let mut rng = Rng::new(x, y, params.frame, s, params.seed);
-            let ray = camera_ray(x, y, params, &mut rng);
-            trace_path_counted(ray, params, walls, spheres, &mut rng, &mut count);
-        }
+        camera_sample(x, y, s, params, walls, spheres, &mut count);
     }
     count.0
 }
@@ -287,17 +275,27 @@ pub fn camera_ray<S: Sampler>(x: u32, y: u32, params: &FrameParams, sampler: &mu
     params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height)
 }
 
-/// One camera sample of pixel (`x`, `y`): the radiance of one path.
-fn sample_pixel<S: Sampler>(
+/// Camera sample `s` of pixel (`x`, `y`) in this frame: the radiance of one
+/// path, on independent PCG streams or the Owen-scrambled Sobol sequence
+/// (`FLAG_SOBOL`). The one place that picks the sampler.
+fn camera_sample<C: RayCounter>(
     x: u32,
     y: u32,
+    s: u32,
     params: &FrameParams,
     walls: &[Wall],
     spheres: &[Sphere],
-    sampler: &mut S,
+    rays: &mut C,
 ) -> Vec3 {
-    let ray = camera_ray(x, y, params, sampler);
-    trace_path(ray, params, walls, spheres, sampler)
+    if params.flags & FLAG_SOBOL != 0 {
+        let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
+        let ray = camera_ray(x, y, params, &mut sampler);
+        trace_path(ray, params, walls, spheres, &mut sampler, rays)
+    } else {
+        let mut rng = Rng::new(x, y, params.frame, s, params.seed);
+        let ray = camera_ray(x, y, params, &mut rng);
+        trace_path(ray, params, walls, spheres, &mut rng, rays)
+    }
 }
 
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`
@@ -308,16 +306,9 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, walls: &[Wall], sphere
     // Kahan compensation of the frame's sum: thousands of samples per frame
     // would otherwise drift (a sum of 65536 x 0.1 in f32 is off by 6e-4).
     let mut compensation = Vec3::ZERO;
-    let sobol = params.flags & FLAG_SOBOL != 0;
     let mut s = 0;
     while s < params.samples_per_frame {
-        let l = if sobol {
-            let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
-            sample_pixel(x, y, params, walls, spheres, &mut sampler)
-        } else {
-            let mut rng = Rng::new(x, y, params.frame, s, params.seed);
-            sample_pixel(x, y, params, walls, spheres, &mut rng)
-        };
+        let l = camera_sample(x, y, s, params, walls, spheres, &mut NoRayCount);
         if is_finite(l) {
             // width != 0 always; the compiler cannot know it (see kahan_add).
             kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);
