@@ -2,7 +2,8 @@
 //! as mean-radiance images.
 
 use pt_core::AccumPixel;
-use pt_render::{CpuRenderer, GpuContext, GpuRenderer, RenderSettings, Scene};
+use pt_render::renderer::render_accum;
+use pt_render::{GpuContext, RenderSettings, Scene};
 
 /// A GPU context, or a panic that says why: GPU tests never skip silently.
 /// CI installs Mesa's lavapipe, so an adapter is always there.
@@ -25,26 +26,12 @@ pub fn render_gpu(
     seed: u32,
 ) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
-    let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).expect("GPU renderer");
-    let mut done = 0;
-    while done < settings.spp {
-        let n = per_frame.min(settings.spp - done);
-        r.submit_frame(n);
-        done += n;
-    }
-    ctx.wait().expect("GPU frames");
-    r.read_accum(ctx).expect("readback")
+    render_accum(Some(ctx), params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame)
+        .expect("GPU render")
 }
 
 /// The same on the CPU.
 pub fn render_cpu(scene: &Scene, settings: &RenderSettings, per_frame: u32, seed: u32) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
-    let mut r = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
-    let mut done = 0;
-    while done < settings.spp {
-        let n = per_frame.min(settings.spp - done);
-        r.render_frame(n);
-        done += n;
-    }
-    r.accum().to_vec()
+    render_accum(None, params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame).expect("CPU render")
 }

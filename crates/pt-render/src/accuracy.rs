@@ -22,8 +22,7 @@ use pt_core::wall::intersect_wall;
 use pt_core::{AccumPixel, FrameParams, Ray, Sphere, SphereLight, Wall, integrator, light};
 use rayon::prelude::*;
 
-use crate::CpuRenderer;
-use crate::gpu::{GpuContext, GpuError, GpuRenderer};
+use crate::gpu::{GpuContext, GpuError};
 use crate::metrics::{mean_and_stderr, region_means};
 use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
 use crate::stats::{SphereBins, chi2_test};
@@ -127,28 +126,11 @@ impl Target<'_> {
         spp: u32,
         per_frame: u32,
     ) -> Result<Vec<AccumPixel>, GpuError> {
-        let mut done = 0;
-        match self {
-            Target::Cpu => {
-                let mut r = CpuRenderer::new(params, walls, spheres);
-                while done < spp {
-                    let n = per_frame.min(spp - done);
-                    r.render_frame(n);
-                    done += n;
-                }
-                Ok(r.accum().to_vec())
-            }
-            Target::Gpu(ctx) => {
-                let mut r = GpuRenderer::new(ctx, params, walls, spheres)?;
-                while done < spp {
-                    let n = per_frame.min(spp - done);
-                    r.submit_frame(n);
-                    done += n;
-                }
-                ctx.wait()?;
-                r.read_accum(ctx)
-            }
-        }
+        let ctx = match self {
+            Target::Cpu => None,
+            Target::Gpu(ctx) => Some(*ctx),
+        };
+        crate::renderer::render_accum(ctx, params, walls, spheres, spp, per_frame)
     }
 }
 

@@ -145,3 +145,32 @@ pub fn render_progressive(
     };
     Ok((accum, stats))
 }
+
+/// Renders `spp` samples per pixel in frames of at most `per_frame`, on
+/// the GPU of `ctx` or, without one, on the CPU, and returns the
+/// accumulation: a whole render for tests and the accuracy suite, on a
+/// context they share (pipelines are compiled once per context).
+pub fn render_accum(
+    ctx: Option<&GpuContext>,
+    params: FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    spp: u32,
+    per_frame: u32,
+) -> Result<Vec<AccumPixel>, GpuError> {
+    let per_frame = per_frame.max(1);
+    let frames = (0..spp).step_by(per_frame as usize).map(|done| per_frame.min(spp - done));
+    match ctx {
+        Some(ctx) => {
+            let mut r = GpuRenderer::new(ctx, params, walls, spheres)?;
+            frames.for_each(|n| r.submit_frame(n));
+            ctx.wait()?;
+            r.read_accum(ctx)
+        }
+        None => {
+            let mut r = CpuRenderer::new(params, walls, spheres);
+            frames.for_each(|n| r.render_frame(n));
+            Ok(r.accum().to_vec())
+        }
+    }
+}
