@@ -370,8 +370,21 @@ pub fn convergence(
     Ok(points)
 }
 
-/// Mean over seeds of (time, relMSE) at each sample count of a curve.
-pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<(f64, f64, f64, f64)> {
+/// One sample count of a strategy's curve, over its seeds.
+#[derive(Copy, Clone, Debug)]
+pub struct CurvePoint {
+    /// Mean seconds.
+    pub time: f64,
+    /// Mean relMSE.
+    pub rel_mse: f64,
+    /// Smallest relMSE of a seed.
+    pub rel_mse_min: f64,
+    /// Largest relMSE of a seed.
+    pub rel_mse_max: f64,
+}
+
+/// Mean and spread over seeds at each sample count of a curve.
+pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<CurvePoint> {
     let mut spps: Vec<u32> =
         points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.spp).collect();
     spps.sort_unstable();
@@ -381,24 +394,32 @@ pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<(f64, 
             let sel: Vec<&Point> =
                 points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.spp == spp).collect();
             let n = sel.len() as f64;
-            let t = sel.iter().map(|p| p.time).sum::<f64>() / n;
-            let e = sel.iter().map(|p| p.rel_mse).sum::<f64>() / n;
-            let (lo, hi) = sel.iter().fold((f64::MAX, 0.0f64), |(lo, hi), p| (lo.min(p.rel_mse), hi.max(p.rel_mse)));
-            (t, e, lo, hi)
+            CurvePoint {
+                time: sel.iter().map(|p| p.time).sum::<f64>() / n,
+                rel_mse: sel.iter().map(|p| p.rel_mse).sum::<f64>() / n,
+                rel_mse_min: sel.iter().map(|p| p.rel_mse).fold(f64::MAX, f64::min),
+                rel_mse_max: sel.iter().map(|p| p.rel_mse).fold(0.0, f64::max),
+            }
         })
         .collect()
 }
 
-/// log-log interpolation of relMSE at time `t` along a mean curve.
-fn rel_mse_at(curve: &[(f64, f64, f64, f64)], t: f64) -> Option<f64> {
+/// (time, relMSE) pairs of a mean curve.
+pub fn time_error(curve: &[CurvePoint]) -> Vec<(f64, f64)> {
+    curve.iter().map(|p| (p.time, p.rel_mse)).collect()
+}
+
+/// log-log interpolation of relMSE at time `t` along (time, relMSE) pairs.
+fn rel_mse_at(curve: &[(f64, f64)], t: f64) -> Option<f64> {
     curve.windows(2).find(|w| w[0].0 <= t && t <= w[1].0).map(|w| {
         let f = (t.ln() - w[0].0.ln()) / (w[1].0.ln() - w[0].0.ln());
         (w[0].1.ln() + f * (w[1].1.ln() - w[0].1.ln())).exp()
     })
 }
 
-/// log-log interpolation of the time at which relMSE reaches `target`.
-fn time_to(curve: &[(f64, f64, f64, f64)], target: f64) -> Option<f64> {
+/// log-log interpolation of the time at which relMSE reaches `target`
+/// along (time, relMSE) pairs.
+pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
     curve.windows(2).find(|w| w[0].1 >= target && w[1].1 <= target).map(|w| {
         let f = (target.ln() - w[0].1.ln()) / (w[1].1.ln() - w[0].1.ln());
         (w[0].0.ln() + f * (w[1].0.ln() - w[0].0.ln())).exp()
@@ -414,25 +435,21 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
     for b in &backends {
         let curves: Vec<_> = STRATEGIES.iter().map(|st| (st, mean_curve(points, b, st.name))).collect();
         // Equal time: the shortest total time of any strategy.
-        let t_eq = curves.iter().map(|(_, c)| c.last().map_or(f64::MAX, |l| l.0)).fold(f64::MAX, f64::min);
-        let base_time = time_to(&curves[0].1, target);
+        let t_eq = curves.iter().map(|(_, c)| c.last().map_or(f64::MAX, |l| l.time)).fold(f64::MAX, f64::min);
+        let base_time = time_to(&time_error(&curves[0].1), target);
+        let _ = writeln!(s, "\n### {b}\n");
         let _ = writeln!(
             s,
-            "
-### {b}
-"
-        );
-        let _ = writeln!(
-            s,
-            "| strategy | samples/s | relMSE at {t_eq:.3} s | relMSE x time at {max_spp} spp | time to relMSE {target:.0e} | speed-up vs default |
-|---|---|---|---|---|---|"
+            "| strategy | samples/s | relMSE at {t_eq:.3} s | relMSE at {max_spp} spp (seed range) | relMSE x time at {max_spp} spp \
+             | time to relMSE {target:.0e} | speed-up vs default |\n|---|---|---|---|---|---|---|"
         );
         let mut best: Option<(&str, f64)> = None;
         for (st, c) in &curves {
             let Some(last) = c.last() else { continue };
-            let sps = pixels as f64 * max_spp as f64 / last.0;
-            let at = rel_mse_at(c, t_eq).or_else(|| (c[0].0 >= t_eq).then_some(c[0].1));
-            let tt = time_to(c, target);
+            let te = time_error(c);
+            let sps = pixels as f64 * max_spp as f64 / last.time;
+            let at = rel_mse_at(&te, t_eq).or_else(|| (te[0].0 >= t_eq).then_some(te[0].1));
+            let tt = time_to(&te, target);
             if let Some(t) = tt
                 && best.is_none_or(|(_, bt)| t < bt)
             {
@@ -440,12 +457,15 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
             }
             let _ = writeln!(
                 s,
-                "| {} | {:.3e} | {} | {:.3e} | {} | {} |",
+                "| {} | {:.3e} | {} | {:.3e} ({:.2e}-{:.2e}) | {:.3e} | {} | {} |",
                 st.name,
                 sps,
                 at.map_or("-".into(), |v| format!("{v:.3e}")),
-                last.1 * last.0,
-                tt.map_or(format!("> {:.2} s", last.0), |t| format!("{t:.3} s")),
+                last.rel_mse,
+                last.rel_mse_min,
+                last.rel_mse_max,
+                last.rel_mse * last.time,
+                tt.map_or(format!("> {:.2} s", last.time), |t| format!("{t:.3} s")),
                 match (tt, base_time) {
                     (Some(t), Some(b)) => format!("{:.2}x", b / t),
                     _ => "-".into(),
@@ -453,11 +473,7 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
             );
         }
         if let Some((name, t)) = best {
-            let _ = writeln!(
-                s,
-                "
-Fastest to relMSE {target:.0e} on this backend: **{name}** ({t:.3} s)."
-            );
+            let _ = writeln!(s, "\nFastest to relMSE {target:.0e} on this backend: **{name}** ({t:.3} s).");
         }
     }
     s
@@ -492,7 +508,7 @@ pub fn plot(path: &Path, points: &[Point], extra: &[(String, Vec<(f64, f64)>)]) 
         for st in &STRATEGIES {
             let c = mean_curve(points, b, st.name);
             let short = if b.starts_with("GPU") { "GPU" } else { "CPU" };
-            series.push((format!("{short}: {}", st.name), c.iter().map(|p| (p.0, p.1)).collect()));
+            series.push((format!("{short}: {}", st.name), time_error(&c)));
         }
     }
     series.extend(extra.iter().cloned());

@@ -460,7 +460,7 @@ error is below 1e-6 on both backends.\n\
 frame drifted by 6e-4. It is compensated too.";
 
 fn rayon_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    rayon::current_num_threads()
 }
 
 /// "model name, N cores" of this machine (from /proc/cpuinfo where present).
@@ -623,15 +623,9 @@ named.\n";
 /// The Mitsuba comparison: time to relMSE 1e-3, ours against Mitsuba's.
 fn mitsuba_section(csv: &PathBuf, points: &[bench::Point]) -> Result<String> {
     let m = bench::read_curve(csv)?;
-    let time_to = |c: &[(f64, f64)]| {
-        c.windows(2).find(|w| w[0].1 >= 1e-3 && w[1].1 <= 1e-3).map(|w| {
-            let f = (1e-3f64.ln() - w[0].1.ln()) / (w[1].1.ln() - w[0].1.ln());
-            (w[0].0.ln() + f * (w[1].0.ln() - w[0].0.ln())).exp()
-        })
-    };
+    let tm = bench::time_to(&m, 1e-3);
     let mut s =
         String::from(MITSUBA_FAIRNESS) + "| renderer | time to relMSE 1e-3 | ratio to Mitsuba |\n|---|---|---|\n";
-    let tm = time_to(&m);
     s.push_str(&format!(
         "| Mitsuba 3 llvm_ad_rgb, path (`{}`) | {} | 1 |\n",
         csv.display(),
@@ -640,9 +634,7 @@ fn mitsuba_section(csv: &PathBuf, points: &[bench::Point]) -> Result<String> {
     let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
     backends.dedup();
     for b in backends {
-        let c: Vec<(f64, f64)> =
-            bench::mean_curve(points, &b, bench::STRATEGIES[0].name).iter().map(|p| (p.0, p.1)).collect();
-        let t = time_to(&c);
+        let t = bench::time_to(&bench::time_error(&bench::mean_curve(points, &b, bench::STRATEGIES[0].name)), 1e-3);
         s.push_str(&format!(
             "| pathtracer {b}, default strategy | {} | {} |\n",
             t.map_or("not reached".into(), |t| format!("{t:.3} s")),
