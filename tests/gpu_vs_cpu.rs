@@ -128,7 +128,7 @@ fn non_finite_samples_are_counted_and_discarded() {
     assert!(accum.iter().all(|p| p.mean().is_finite()), "a non-finite sample was accumulated");
     assert_eq!(accum.iter().map(|p| (p.samples + p.non_finite) as u64).sum::<u64>(), 32 * 32 * 4);
 
-    let mut cpu = pt_render::CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
+    let mut cpu = pt_render::CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
     cpu.render_frame(4);
     assert!(cpu.accum().iter().map(|p| p.non_finite).sum::<u32>() > 0);
     assert!(cpu.accum().iter().all(|p| p.mean().is_finite()));

@@ -65,8 +65,8 @@ pub struct ThroughputRow {
 
 /// Rays per camera sample of a configuration: the CPU's instrumented trace
 /// over every 4th pixel in x and y (same code, same distribution as the GPU).
-fn rays_per_sample(params: &FrameParams, scene: &Scene) -> f64 {
-    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+fn rays_per_sample(params: &FrameParams, scene: &Scene) -> Result<f64> {
+    let geometry = scene.geometry()?;
     let rows: Vec<u32> = (0..params.height).step_by(4).collect();
     let (rays, samples) = rows
         .par_iter()
@@ -74,13 +74,13 @@ fn rays_per_sample(params: &FrameParams, scene: &Scene) -> f64 {
             let mut r = 0u64;
             let mut n = 0u64;
             for x in (0..params.width).step_by(4) {
-                r += integrator::count_pixel_rays(x, y, params, &walls, &spheres);
+                r += integrator::count_pixel_rays(x, y, params, &geometry);
                 n += params.samples_per_frame as u64;
             }
             (r, n)
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-    rays as f64 / samples as f64
+    Ok(rays as f64 / samples as f64)
 }
 
 fn median_min_max(mut v: Vec<f64>) -> (f64, f64, f64) {
@@ -101,7 +101,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
             rr_start: DEFAULT_RR_START,
         };
         let params = scene.frame_params(&settings, cfg.spp, 1);
-        let rps = rays_per_sample(&params, scene);
+        let rps = rays_per_sample(&params, scene)?;
         let samples = cfg.width as f64 * cfg.height as f64 * cfg.spp as f64;
         if let Some(ctx) = ctx {
             // Every workgroup shape on the first 512x512 configuration, the
@@ -114,7 +114,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
                 rows.push(row(cfg, backend, times, samples, rps, timestamps));
             }
         }
-        let mut cpu = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres());
+        let mut cpu = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres())?;
         cpu.render_frame(cfg.spp);
         let mut times = Vec::new();
         for _ in 0..reps {
@@ -264,16 +264,16 @@ fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
 }
 
 /// Renders the reference: `spp` samples per pixel on the CPU.
-pub fn reference(scene: &Scene, settings: &RenderSettings, spp: u32) -> Vec<[f32; 3]> {
-    let mut r =
-        CpuRenderer::new(scene.frame_params(settings, 64, REFERENCE_SEED), &scene.gpu_walls(), &scene.gpu_spheres());
+pub fn reference(scene: &Scene, settings: &RenderSettings, spp: u32) -> Result<Vec<[f32; 3]>> {
+    let params = scene.frame_params(settings, 64, REFERENCE_SEED);
+    let mut r = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres())?;
     let mut done = 0;
     while done < spp {
         let n = 64.min(spp - done);
         r.render_frame(n);
         done += n;
     }
-    means(r.accum())
+    Ok(means(r.accum()))
 }
 
 /// Seed of the reference render: distinct from every test seed.
@@ -304,7 +304,7 @@ fn curve(
     }
     let mut r = match ctx {
         Some(c) => R::Gpu(Box::new(GpuRenderer::new(c, params, &walls, &spheres)?)),
-        None => R::Cpu(Box::new(CpuRenderer::new(params, &walls, &spheres))),
+        None => R::Cpu(Box::new(CpuRenderer::new(params, &walls, &spheres)?)),
     };
     let mut points = Vec::new();
     let (mut done, mut next, mut time) = (0u32, 4u32, 0.0f64);

@@ -516,7 +516,7 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
                     "rendering the reference: {ref_spp} spp at {}x{} on the CPU (100x the largest budget)",
                     args.width, args.height
                 );
-                let r = bench::reference(&scene, &settings, ref_spp);
+                let r = bench::reference(&scene, &settings, ref_spp)?;
                 output::write_exr(&args.out_dir.join("reference.exr"), args.width, args.height, &r)?;
                 r
             }

@@ -350,7 +350,7 @@ impl Viewer {
             || self.settings.scene.spheres != self.applied.scene.spheres;
         self.renderer.set_params(params)?;
         if geometry_changed {
-            self.renderer.set_geometry(&self.settings.scene.gpu_walls(), &self.settings.scene.gpu_spheres());
+            self.renderer.set_geometry(&self.settings.scene.gpu_walls(), &self.settings.scene.gpu_spheres())?;
         }
         if (self.settings.width, self.settings.height) != (self.applied.width, self.applied.height) {
             self.blit_group = self.blit.bind_group(&self.ctx, &self.renderer);

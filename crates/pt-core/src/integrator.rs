@@ -4,6 +4,7 @@
 use spirv_std::glam::Vec3;
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
+use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use crate::light::light_cone;
 use crate::params::FLAG_SOBOL;
 use crate::params::{FLAG_MIS, FLAG_NEE, FrameParams};
@@ -11,8 +12,8 @@ use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
 use crate::sampling::{PI, cosine_hemisphere, power_heuristic};
-use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point};
-use crate::wall::{Wall, intersect_wall};
+use crate::sphere::{intersect_sphere, sphere_hit_point};
+use crate::wall::intersect_wall;
 
 /// What a ray hit. `u32`-sized: SPIR-V has no 8-bit integers without the
 /// Int8 capability.
@@ -51,23 +52,23 @@ pub const NO_WALL: u32 = u32::MAX;
 /// with certainty, and its weight grows by at most 1/0.05 = 20.
 pub const RR_MIN_SURVIVAL: f32 = 0.05;
 
+/// The walls and spheres in use, clamped to the block's arrays: the loops
+/// below then need no bounds checks, and a bad count cannot read past them.
+fn counts(params: &FrameParams) -> (u32, u32) {
+    (params.wall_count.min(MAX_WALLS as u32), params.sphere_count.min(MAX_SPHERES as u32))
+}
+
 /// The closest hit in (0, `t_max`) over walls, spheres and the light, brute
 /// force. `skip_wall` is the wall the ray leaves from: a plane cannot be hit
 /// again by a ray that leaves it, so testing it could only find rounding
 /// noise.
-pub fn closest_hit(
-    ray: &Ray,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-    skip_wall: u32,
-    t_max: f32,
-) -> Hit {
+pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> Hit {
     let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
+    let (wall_count, sphere_count) = counts(params);
     let mut i = 0;
-    while i < params.wall_count {
+    while i < wall_count {
         if i != skip_wall {
-            let t = intersect_wall(&walls[i as usize], ray, 0.0, hit.t);
+            let t = intersect_wall(&geometry.walls[i as usize], ray, 0.0, hit.t);
             if t < hit.t {
                 hit = Hit { t, kind: HitKind::Wall, index: i };
             }
@@ -75,8 +76,8 @@ pub fn closest_hit(
         i += 1;
     }
     let mut i = 0;
-    while i < params.sphere_count {
-        let s = spheres[i as usize];
+    while i < sphere_count {
+        let s = geometry.spheres[i as usize];
         let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
         if t < hit.t {
             hit = Hit { t, kind: HitKind::Sphere, index: i };
@@ -92,24 +93,18 @@ pub fn closest_hit(
 
 /// Whether a wall or sphere blocks the ray in (0, `t_max`). The light is no
 /// occluder of itself: shadow rays end on its surface.
-pub fn occluded(
-    ray: &Ray,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-    skip_wall: u32,
-    t_max: f32,
-) -> bool {
+pub fn occluded(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> bool {
+    let (wall_count, sphere_count) = counts(params);
     let mut i = 0;
-    while i < params.wall_count {
-        if i != skip_wall && intersect_wall(&walls[i as usize], ray, 0.0, t_max) < t_max {
+    while i < wall_count {
+        if i != skip_wall && intersect_wall(&geometry.walls[i as usize], ray, 0.0, t_max) < t_max {
             return true;
         }
         i += 1;
     }
     let mut i = 0;
-    while i < params.sphere_count {
-        let s = spheres[i as usize];
+    while i < sphere_count {
+        let s = geometry.spheres[i as usize];
         if intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max {
             return true;
         }
@@ -147,65 +142,99 @@ impl RayCounter for RayCount {
     }
 }
 
-/// Radiance arriving along `ray`: one path sample, unbiased for
-/// `params.max_bounces` scattering events (DESIGN sections 4 and 5). Its
-/// rays are counted in `rays` ([`NoRayCount`] in the renderers).
-pub fn trace_path<S: Sampler, C: RayCounter>(
-    mut ray: Ray,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-    rng: &mut S,
-    rays: &mut C,
-) -> Vec3 {
-    let nee = params.flags & FLAG_NEE != 0;
-    let mis = params.flags & FLAG_MIS != 0;
-    let light = params.light;
-    let mut radiance = Vec3::ZERO;
-    let mut throughput = Vec3::ONE;
-    let mut bounces = 0u32;
-    let mut skip_wall = NO_WALL;
-    // Densities with which the BSDF and NEE could have produced the current
-    // ray's direction (solid angle), for the MIS weight of a light hit.
-    let mut bsdf_pdf = 0.0f32;
-    let mut nee_pdf = 0.0f32;
+/// One path in flight: what the path loop carries from one segment to the
+/// next. [`Path::step`] traces one segment; a path is unbiased for
+/// `params.max_bounces` scattering events (DESIGN sections 4 and 5).
+///
+/// `repr(C)` with the ray as two vectors and the sampler last: naga rounds a
+/// struct's size up to 16 bytes when it holds a `Vec3`, so a `Ray` member
+/// (24 bytes, rounded to 32) followed by another member at Rust's offset 24
+/// fails validation as an overlap, and Rust's own field order would not be
+/// the declared one.
+#[repr(C)]
+pub struct Path<S> {
+    /// Origin of the ray to trace next.
+    origin: Vec3,
+    /// Its unit direction.
+    dir: Vec3,
+    /// Radiance gathered so far: the sample's value once the path has ended.
+    pub radiance: Vec3,
+    throughput: Vec3,
+    bounces: u32,
+    skip_wall: u32,
+    /// Densities with which the BSDF and NEE could have produced the current
+    /// ray's direction (solid angle), for the MIS weight of a light hit.
+    bsdf_pdf: f32,
+    nee_pdf: f32,
+    sampler: S,
+}
 
-    loop {
+impl<S: Sampler> Path<S> {
+    /// Camera sample `s` of pixel (`x`, `y`) in this frame: a primary ray
+    /// jittered uniformly in the pixel (a box filter) by the sampler's first
+    /// pair.
+    pub fn camera(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
+        let mut sampler = S::for_camera_sample(x, y, s, params);
+        let u = sampler.next_2d();
+        let ray = params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height);
+        Self {
+            origin: ray.origin,
+            dir: ray.dir,
+            sampler,
+            radiance: Vec3::ZERO,
+            throughput: Vec3::ONE,
+            bounces: 0,
+            skip_wall: NO_WALL,
+            bsdf_pdf: 0.0,
+            nee_pdf: 0.0,
+        }
+    }
+
+    /// Traces the current ray to its closest hit and shades it: emission,
+    /// one shadow ray (NEE), the next direction and Russian roulette.
+    /// Returns whether the path has ended; its rays are counted in `rays`
+    /// ([`NoRayCount`] in the renderers).
+    pub fn step<C: RayCounter>(&mut self, params: &FrameParams, geometry: &Geometry, rays: &mut C) -> bool {
+        let nee = params.flags & FLAG_NEE != 0;
+        let mis = params.flags & FLAG_MIS != 0;
+        let light = params.light;
+        let ray = Ray { origin: self.origin, dir: self.dir };
+
         rays.ray();
-        let hit = closest_hit(&ray, params, walls, spheres, skip_wall, T_FAR);
+        let hit = closest_hit(&ray, params, geometry, self.skip_wall, T_FAR);
         if hit.kind == HitKind::Nothing {
-            radiance += throughput * params.background;
-            break;
+            self.radiance += self.throughput * params.background;
+            return true;
         }
         if hit.kind == HitKind::Light {
             // The light emits outward only; from inside it shows nothing.
             let front = ray.dir.dot(ray.at(hit.t) - light.center) < 0.0;
             if front {
-                let weight = if bounces == 0 || !nee || nee_pdf == 0.0 {
+                let weight = if self.bounces == 0 || !nee || self.nee_pdf == 0.0 {
                     // Camera rays, or no NEE could have found this light.
                     1.0
                 } else if mis {
-                    power_heuristic(bsdf_pdf, nee_pdf)
+                    power_heuristic(self.bsdf_pdf, self.nee_pdf)
                 } else {
                     // NEE alone accounts for light reached after a bounce.
                     0.0
                 };
-                radiance += throughput * light.radiance * weight;
+                self.radiance += self.throughput * light.radiance * weight;
             }
-            break;
+            return true;
         }
-        if bounces >= params.max_bounces {
-            break;
+        if self.bounces >= params.max_bounces {
+            return true;
         }
 
         // The surface point, its normal, its albedo and a bound on the
         // magnitudes its coordinates were computed from.
         let (p, normal, albedo, magnitude, wall_index) = if hit.kind == HitKind::Wall {
-            let w = walls[hit.index as usize];
+            let w = geometry.walls[hit.index as usize];
             let magnitude = ray.origin.abs() + (ray.dir * hit.t).abs();
             (ray.at(hit.t), w.normal, w.albedo, magnitude, hit.index)
         } else {
-            let s = spheres[hit.index as usize];
+            let s = geometry.spheres[hit.index as usize];
             let (p, n) = sphere_hit_point(s.center, s.radius, &ray, hit.t);
             (p, n, s.albedo, s.center.abs() + Vec3::splat(s.radius), NO_WALL)
         };
@@ -218,105 +247,103 @@ pub fn trace_path<S: Sampler, C: RayCounter>(
         let cone = light_cone(&light, origin);
         let cone_pdf = cone.pdf();
         if nee && !cone.is_empty() {
-            let u = rng.next_2d();
+            let u = self.sampler.next_2d();
             let (dir, dist) = cone.sample(u.x, u.y);
             let cos = n.dot(dir);
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
                 rays.ray();
-                if !occluded(&shadow, params, walls, spheres, wall_index, dist) {
+                if !occluded(&shadow, params, geometry, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
                     let weight = if mis { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
-                    radiance += throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
+                    self.radiance += self.throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
                 }
             }
         }
 
         // BSDF sampling: cosine-weighted, so f cos / pdf = albedo.
-        let u = rng.next_2d();
+        let u = self.sampler.next_2d();
         let dir = cosine_hemisphere(n, u.x, u.y);
-        bsdf_pdf = n.dot(dir).max(0.0) * (1.0 / PI);
-        nee_pdf = cone_pdf;
-        throughput *= albedo;
-        bounces += 1;
+        self.bsdf_pdf = n.dot(dir).max(0.0) * (1.0 / PI);
+        self.nee_pdf = cone_pdf;
+        self.throughput *= albedo;
+        self.bounces += 1;
 
         // Russian roulette: survive with a probability that follows the
         // throughput, and divide by it so the estimate stays unbiased.
-        if bounces >= params.rr_start {
-            let survive = throughput.max_element().clamp(RR_MIN_SURVIVAL, 1.0);
-            if rng.next_1d() >= survive {
-                break;
+        if self.bounces >= params.rr_start {
+            let survive = self.throughput.max_element().clamp(RR_MIN_SURVIVAL, 1.0);
+            if self.sampler.next_1d() >= survive {
+                return true;
             }
-            throughput /= survive;
+            self.throughput /= survive;
         }
 
-        ray = Ray { origin, dir };
-        skip_wall = wall_index;
-    }
-    radiance
-}
-
-/// Rays traced by the samples of pixel (`x`, `y`) in one frame: what
-/// [`render_pixel`] does, counting instead of accumulating (benchmarks).
-#[cfg(not(target_arch = "spirv"))]
-pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> u64 {
-    let mut count = RayCount::default();
-    for s in 0..params.samples_per_frame {
-        camera_sample(x, y, s, params, walls, spheres, &mut count);
-    }
-    count.0
-}
-
-/// The primary ray of pixel (`x`, `y`), jittered uniformly in the pixel
-/// (a box filter) by the sampler's first pair.
-pub fn camera_ray<S: Sampler>(x: u32, y: u32, params: &FrameParams, sampler: &mut S) -> Ray {
-    let u = sampler.next_2d();
-    params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height)
-}
-
-/// Camera sample `s` of pixel (`x`, `y`) in this frame: the radiance of one
-/// path, on independent PCG streams or the Owen-scrambled Sobol sequence
-/// (`FLAG_SOBOL`). The one place that picks the sampler.
-fn camera_sample<C: RayCounter>(
-    x: u32,
-    y: u32,
-    s: u32,
-    params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
-    rays: &mut C,
-) -> Vec3 {
-    if params.flags & FLAG_SOBOL != 0 {
-        let mut sampler = SobolSampler::new(x, y, params.sample_offset + s, params.seed);
-        let ray = camera_ray(x, y, params, &mut sampler);
-        trace_path(ray, params, walls, spheres, &mut sampler, rays)
-    } else {
-        let mut rng = Rng::new(x, y, params.frame, s, params.seed);
-        let ray = camera_ray(x, y, params, &mut rng);
-        trace_path(ray, params, walls, spheres, &mut rng, rays)
+        (self.origin, self.dir) = (origin, dir);
+        self.skip_wall = wall_index;
+        false
     }
 }
 
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`
 /// camera samples, from independent PCG streams or from the Owen-scrambled
 /// Sobol sequence (`FLAG_SOBOL`), non-finite results counted and discarded.
-pub fn render_pixel(x: u32, y: u32, params: &FrameParams, walls: &[Wall], spheres: &[Sphere]) -> PixelSamples {
+pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
+    pixel(x, y, params, geometry, &mut NoRayCount)
+}
+
+/// Rays traced by the samples of pixel (`x`, `y`) in one frame: what
+/// [`render_pixel`] does, counting its rays (benchmarks).
+#[cfg(not(target_arch = "spirv"))]
+pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> u64 {
+    let mut count = RayCount::default();
+    pixel(x, y, params, geometry, &mut count);
+    count.0
+}
+
+/// [`render_pixel`] with its rays counted: the one place that picks the
+/// sampler.
+fn pixel<C: RayCounter>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry, rays: &mut C) -> PixelSamples {
+    if params.flags & FLAG_SOBOL != 0 {
+        pixel_samples::<SobolSampler, C>(x, y, params, geometry, rays)
+    } else {
+        pixel_samples::<Rng, C>(x, y, params, geometry, rays)
+    }
+}
+
+/// The pixel's samples, one segment per loop iteration: when a path ends,
+/// the next camera sample starts in the same iteration's place (path
+/// regeneration, Novak, Havran and Dachsbacher 2010). SIMD lanes (8 on
+/// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
+/// instead of waiting each sample for their longest path. Samples are added
+/// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
+fn pixel_samples<S: Sampler, C: RayCounter>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    geometry: &Geometry,
+    rays: &mut C,
+) -> PixelSamples {
     let mut out = PixelSamples::default();
     // Kahan compensation of the frame's sum: thousands of samples per frame
     // would otherwise drift (a sum of 65536 x 0.1 in f32 is off by 6e-4).
     let mut compensation = Vec3::ZERO;
     let mut s = 0;
+    let mut path = Path::<S>::camera(x, y, s, params);
     while s < params.samples_per_frame {
-        let l = camera_sample(x, y, s, params, walls, spheres, &mut NoRayCount);
-        if is_finite(l) {
-            // width != 0 always; the compiler cannot know it (see kahan_add).
-            kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);
-            out.valid += 1;
-        } else {
-            out.non_finite += 1;
+        if path.step(params, geometry, rays) {
+            let l = path.radiance;
+            if is_finite(l) {
+                // width != 0 always; the compiler cannot know it (see kahan_add).
+                kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);
+                out.valid += 1;
+            } else {
+                out.non_finite += 1;
+            }
+            s += 1;
+            path = Path::camera(x, y, s, params);
         }
-        s += 1;
     }
     out
 }

@@ -8,6 +8,7 @@
 
 pub mod accum;
 pub mod camera;
+pub mod geometry;
 pub mod integrator;
 pub mod light;
 pub mod params;
@@ -23,6 +24,7 @@ pub use spirv_std::glam;
 
 pub use accum::{AccumPixel, PixelSamples};
 pub use camera::Camera;
+pub use geometry::Geometry;
 pub use light::SphereLight;
 pub use params::FrameParams;
 pub use ray::Ray;

@@ -11,10 +11,14 @@
 
 use spirv_std::glam::Vec2;
 
+use crate::params::FrameParams;
 use crate::rng::{Rng, pcg_hash};
 
 /// What the path loop draws its random numbers from.
 pub trait Sampler {
+    /// The generator for camera sample `s` of pixel (`x`, `y`) in the frame
+    /// that `params` describes.
+    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self;
     /// The next number in [0, 1).
     fn next_1d(&mut self) -> f32;
     /// The next pair of numbers in [0, 1)^2.
@@ -22,6 +26,10 @@ pub trait Sampler {
 }
 
 impl Sampler for Rng {
+    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
+        Rng::new(x, y, params.frame, s, params.seed)
+    }
+
     fn next_1d(&mut self) -> f32 {
         self.next_f32()
     }
@@ -123,6 +131,11 @@ impl SobolSampler {
 }
 
 impl Sampler for SobolSampler {
+    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
+        // The index runs on across frames: stratified over the whole render.
+        SobolSampler::new(x, y, params.sample_offset + s, params.seed)
+    }
+
     fn next_1d(&mut self) -> f32 {
         // One dimension: the Owen-scrambled van der Corput sequence at the
         // shuffled index.

@@ -8,7 +8,7 @@ use spirv_std::glam::Vec3;
 
 use crate::ray::Ray;
 
-/// A Lambertian sphere, as the kernel reads it from its storage buffer.
+/// A Lambertian sphere, as the kernel reads it from its geometry block.
 #[repr(C)]
 #[derive(Copy, Clone, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Sphere {

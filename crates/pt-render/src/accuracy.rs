@@ -768,7 +768,7 @@ fn watertight(size: Size, out: &mut Vec<CaseResult>) {
     };
     let mut params = scene.frame_params(&RenderSettings::default(), 1, 0);
     params.sphere_count = 0;
-    let walls = scene.gpu_walls();
+    let geometry = scene.geometry().expect("six walls fit the geometry block");
     let chunks = 64u32;
     let escapes: u64 = (0..chunks)
         .into_par_iter()
@@ -802,8 +802,7 @@ fn watertight(size: Size, out: &mut Vec<CaseResult>) {
                 let hit = integrator::closest_hit(
                     &Ray { origin: o, dir },
                     &params,
-                    &walls,
-                    &[],
+                    &geometry,
                     integrator::NO_WALL,
                     integrator::T_FAR,
                 );

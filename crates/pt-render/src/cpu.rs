@@ -2,14 +2,15 @@
 //! with rayon. It is the reference in tests and a user-selectable backend.
 
 use pt_core::tonemap::{display_color, pack_rgba8};
-use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator};
+use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Wall, integrator};
+
+use crate::scene::{TooManyObjects, geometry};
 use rayon::prelude::*;
 
 /// The progressive CPU renderer for one scene and image size.
 pub struct CpuRenderer {
     params: FrameParams,
-    walls: Vec<Wall>,
-    spheres: Vec<Sphere>,
+    geometry: Box<Geometry>,
     accum: Vec<AccumPixel>,
     next_frame: u32,
     /// Samples per pixel accumulated so far (Sobol index).
@@ -18,16 +19,15 @@ pub struct CpuRenderer {
 
 impl CpuRenderer {
     /// A renderer for `params` and geometry, with an empty accumulation.
-    pub fn new(params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Self {
+    pub fn new(params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, TooManyObjects> {
         let pixels = params.width as usize * params.height as usize;
-        Self {
+        Ok(Self {
             params,
-            walls: walls.to_vec(),
-            spheres: spheres.to_vec(),
+            geometry: Box::new(geometry(walls, spheres)?),
             accum: vec![AccumPixel::default(); pixels],
             next_frame: 0,
             samples_done: 0,
-        }
+        })
     }
 
     /// The current parameters.
@@ -43,11 +43,11 @@ impl CpuRenderer {
         self.params.sample_offset = self.samples_done;
         self.samples_done = self.samples_done.saturating_add(samples);
         let params = self.params;
-        let (walls, spheres) = (&self.walls[..], &self.spheres[..]);
+        let geometry = &*self.geometry;
         let width = params.width as usize;
         self.accum.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
-                px.add(integrator::render_pixel(x as u32, y as u32, &params, walls, spheres), true);
+                px.add(integrator::render_pixel(x as u32, y as u32, &params, geometry), true);
             }
         });
         self.next_frame += 1;

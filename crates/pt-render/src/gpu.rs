@@ -3,8 +3,10 @@
 
 use std::sync::{Arc, Mutex};
 
-use pt_core::{AccumPixel, FrameParams, Sphere, WORKGROUP_SIZE, Wall};
+use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
+
+use crate::scene::TooManyObjects;
 
 /// The kernel's SPIR-V, built by `build.rs` with rust-gpu.
 pub const KERNEL_SPV: &[u8] = include_bytes!(env!("PT_KERNEL_SPV"));
@@ -44,6 +46,9 @@ pub enum GpuError {
         /// The adapter's limit.
         limit: u64,
     },
+    /// More walls or spheres than the kernel's geometry block holds.
+    #[error(transparent)]
+    TooManyObjects(#[from] TooManyObjects),
 }
 
 /// A device and queue on the best adapter available, with its description.
@@ -222,9 +227,9 @@ impl Kernel {
         let trace_layout = bind_group_layout(
             device,
             "accumulate",
-            &[storage_entry(1, true), storage_entry(2, true), storage_entry(3, false), storage_entry(5, false)],
+            &[geometry_entry(), storage_entry(2, false), storage_entry(4, false)],
         );
-        let display_layout = bind_group_layout(device, "display", &[storage_entry(3, true), storage_entry(4, false)]);
+        let display_layout = bind_group_layout(device, "display", &[storage_entry(2, true), storage_entry(3, false)]);
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(label),
@@ -258,8 +263,7 @@ pub struct GpuRenderer {
     accumulate: wgpu::ComputePipeline,
     display: wgpu::ComputePipeline,
     params_buf: wgpu::Buffer,
-    walls_buf: wgpu::Buffer,
-    spheres_buf: wgpu::Buffer,
+    geometry_buf: wgpu::Buffer,
     accum_buf: wgpu::Buffer,
     display_buf: wgpu::Buffer,
     /// One u32: non-finite samples discarded since the last reset.
@@ -283,6 +287,20 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
             ty: wgpu::BufferBindingType::Storage { read_only },
             has_dynamic_offset: false,
             min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// The uniform `Geometry` block at binding 1.
+fn geometry_entry() -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding: 1,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size_of::<Geometry>() as u64),
         },
         count: None,
     }
@@ -318,16 +336,14 @@ fn bind_group(
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("pt-kernel"), layout, entries: &entries })
 }
 
-/// A storage buffer holding `data`, at least one element long (wgpu
-/// rejects empty bindings; the kernel reads `count` elements only).
-fn storage_buffer<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buffer {
-    let one = [T::zeroed()];
-    let data = if data.is_empty() { &one[..] } else { data };
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytemuck::cast_slice(data),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-    })
+/// The uniform block holding `walls` and `spheres`.
+fn geometry_buffer(device: &wgpu::Device, walls: &[Wall], spheres: &[Sphere]) -> Result<wgpu::Buffer, GpuError> {
+    let geometry = crate::scene::geometry(walls, spheres)?;
+    Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("geometry"),
+        contents: bytemuck::bytes_of(&geometry),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    }))
 }
 
 impl GpuRenderer {
@@ -342,8 +358,7 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let walls_buf = storage_buffer(&device, "walls", walls);
-        let spheres_buf = storage_buffer(&device, "spheres", spheres);
+        let geometry_buf = geometry_buffer(&device, walls, spheres)?;
         let (accum_buf, display_buf) = Self::image_buffers(&device, params.width, params.height)?;
         let non_finite_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("non-finite count"),
@@ -354,10 +369,10 @@ impl GpuRenderer {
         let trace_group = bind_group(
             &device,
             &trace_layout,
-            &[(0, &params_buf), (1, &walls_buf), (2, &spheres_buf), (3, &accum_buf), (5, &non_finite_buf)],
+            &[(0, &params_buf), (1, &geometry_buf), (2, &accum_buf), (4, &non_finite_buf)],
         );
         let display_group =
-            bind_group(&device, &display_layout, &[(0, &params_buf), (3, &accum_buf), (4, &display_buf)]);
+            bind_group(&device, &display_layout, &[(0, &params_buf), (2, &accum_buf), (3, &display_buf)]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
@@ -369,8 +384,7 @@ impl GpuRenderer {
             accumulate,
             display,
             params_buf,
-            walls_buf,
-            spheres_buf,
+            geometry_buf,
             accum_buf,
             display_buf,
             non_finite_buf,
@@ -428,30 +442,24 @@ impl GpuRenderer {
     }
 
     /// Replaces the geometry (walls and spheres).
-    pub fn set_geometry(&mut self, walls: &[Wall], spheres: &[Sphere]) {
-        self.walls_buf = storage_buffer(&self.device, "walls", walls);
-        self.spheres_buf = storage_buffer(&self.device, "spheres", spheres);
+    pub fn set_geometry(&mut self, walls: &[Wall], spheres: &[Sphere]) -> Result<(), GpuError> {
+        self.geometry_buf = geometry_buffer(&self.device, walls, spheres)?;
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
         self.rebind();
+        Ok(())
     }
 
     fn rebind(&mut self) {
         self.trace_group = bind_group(
             &self.device,
             &self.trace_layout,
-            &[
-                (0, &self.params_buf),
-                (1, &self.walls_buf),
-                (2, &self.spheres_buf),
-                (3, &self.accum_buf),
-                (5, &self.non_finite_buf),
-            ],
+            &[(0, &self.params_buf), (1, &self.geometry_buf), (2, &self.accum_buf), (4, &self.non_finite_buf)],
         );
         self.display_group = bind_group(
             &self.device,
             &self.display_layout,
-            &[(0, &self.params_buf), (3, &self.accum_buf), (4, &self.display_buf)],
+            &[(0, &self.params_buf), (2, &self.accum_buf), (3, &self.display_buf)],
         );
     }
 
@@ -676,7 +684,7 @@ impl Blit {
                     },
                 ),
                 entry(
-                    4,
+                    3,
                     wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Storage { read_only: true },
                         has_dynamic_offset: false,
@@ -717,7 +725,7 @@ impl Blit {
     /// The bind group for `renderer`'s current buffers (recreate it after a
     /// resize).
     pub fn bind_group(&self, ctx: &GpuContext, renderer: &GpuRenderer) -> wgpu::BindGroup {
-        bind_group(&ctx.device, &self.layout, &[(0, renderer.params_buffer()), (4, renderer.display_buffer())])
+        bind_group(&ctx.device, &self.layout, &[(0, renderer.params_buffer()), (3, renderer.display_buffer())])
     }
 
     /// Records the blit into a render pass.

@@ -34,7 +34,7 @@ impl Renderer {
                 let r = GpuRenderer::new(&ctx, params, walls, spheres)?;
                 Renderer::Gpu(Box::new(ctx), Box::new(r))
             }
-            Backend::Cpu => Renderer::Cpu(Box::new(CpuRenderer::new(params, walls, spheres))),
+            Backend::Cpu => Renderer::Cpu(Box::new(CpuRenderer::new(params, walls, spheres)?)),
         })
     }
 
@@ -168,7 +168,7 @@ pub fn render_accum(
             r.read_accum(ctx)
         }
         None => {
-            let mut r = CpuRenderer::new(params, walls, spheres);
+            let mut r = CpuRenderer::new(params, walls, spheres)?;
             frames.for_each(|n| r.render_frame(n));
             Ok(r.accum().to_vec())
         }

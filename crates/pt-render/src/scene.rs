@@ -4,9 +4,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
-use pt_core::{Camera, FrameParams, Sphere, SphereLight, Wall};
+use pt_core::{Camera, FrameParams, Geometry, Sphere, SphereLight, Wall};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -20,6 +21,22 @@ pub const DEFAULT_SCENE_NAME: &str = "<built-in default scene>";
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// Largest `max_bounces` accepted. Russian roulette ends paths long before.
 pub const MAX_BOUNCES_LIMIT: u32 = 1_000_000;
+
+/// More walls or spheres than the kernel's geometry block holds (the
+/// scene loader reports such files with their line first).
+#[derive(Debug, Clone, Copy, thiserror::Error)]
+#[error("{walls} walls and {spheres} spheres: the renderer holds at most {MAX_WALLS} walls and {MAX_SPHERES} spheres")]
+pub struct TooManyObjects {
+    /// Walls given.
+    pub walls: usize,
+    /// Spheres given.
+    pub spheres: usize,
+}
+
+/// The kernel's geometry block holding `walls` and `spheres`.
+pub fn geometry(walls: &[Wall], spheres: &[Sphere]) -> Result<Geometry, TooManyObjects> {
+    Geometry::new(walls, spheres).ok_or(TooManyObjects { walls: walls.len(), spheres: spheres.len() })
+}
 
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -244,6 +261,11 @@ impl Scene {
         self.spheres.iter().map(|s| s.sphere).collect()
     }
 
+    /// The kernel's geometry block (walls and spheres).
+    pub fn geometry(&self) -> Result<Geometry, TooManyObjects> {
+        geometry(&self.gpu_walls(), &self.gpu_spheres())
+    }
+
     /// The kernel's parameters for frame 0 of a render with `settings`.
     pub fn frame_params(&self, settings: &RenderSettings, samples_per_frame: u32, seed: u32) -> FrameParams {
         FrameParams {
@@ -440,6 +462,9 @@ impl Checker<'_> {
         let mut walls = Vec::with_capacity(f.walls.len());
         for (i, w) in f.walls.iter().enumerate() {
             let field = |name: &str| format!("walls[{i}].{name}");
+            if i == MAX_WALLS {
+                return self.err(w.corner.span(), &format!("walls[{i}]"), format!("at most {MAX_WALLS} walls"));
+            }
             let corner = self.finite(&w.corner, &field("corner"))?;
             let edge_u = self.finite(&w.edge_u, &field("edge_u"))?;
             let edge_v = self.finite(&w.edge_v, &field("edge_v"))?;
@@ -460,6 +485,9 @@ impl Checker<'_> {
         let mut spheres = Vec::with_capacity(f.spheres.len());
         for (i, s) in f.spheres.iter().enumerate() {
             let field = |name: &str| format!("spheres[{i}].{name}");
+            if i == MAX_SPHERES {
+                return self.err(s.center.span(), &format!("spheres[{i}]"), format!("at most {MAX_SPHERES} spheres"));
+            }
             let sphere = Sphere::new(
                 self.finite(&s.center, &field("center"))?,
                 self.radius(&s.radius, &field("radius"))?,
@@ -523,6 +551,33 @@ mod tests {
         // Walls span the room x in [-1, 1], y in [0, 2], z in [-1, 1].
         let area: f32 = s.walls.iter().map(|w| w.wall.area()).sum();
         assert_eq!(area, 20.0);
+    }
+
+    #[test]
+    fn more_objects_than_the_geometry_block_holds_are_rejected() {
+        let sphere = |i: usize| {
+            format!("\n[[spheres]]\ncenter = [{i}.0, 0.0, -9.0] # extra\nradius = 0.1\nalbedo = [0.5, 0.5, 0.5]\n")
+        };
+        let wall = |i: usize| {
+            format!(
+                "\n[[walls]]\ncorner = [{i}.0, 0.0, -9.0] # extra\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 1.0, 0.0]\nalbedo = [0.5, 0.5, 0.5]\n"
+            )
+        };
+        // The default scene has 5 walls and 2 spheres: fill up to the limits.
+        let full: String = (5..MAX_WALLS).map(wall).chain((2..MAX_SPHERES).map(sphere)).collect();
+        let scene = load(&format!("{DEFAULT_SCENE_TOML}{full}")).unwrap();
+        assert_eq!((scene.walls.len(), scene.spheres.len()), (MAX_WALLS, MAX_SPHERES));
+        assert!(scene.geometry().is_ok());
+
+        let text = format!("{DEFAULT_SCENE_TOML}{full}{}", wall(MAX_WALLS));
+        let (line, field, message) = invalid(&text);
+        assert_eq!(line, line_of(&text, &format!("corner = [{MAX_WALLS}.0")));
+        assert_eq!((field.as_str(), message.as_str()), ("walls[128]", "at most 128 walls"));
+
+        let text = format!("{DEFAULT_SCENE_TOML}{full}{}", sphere(MAX_SPHERES));
+        let (line, field, message) = invalid(&text);
+        assert_eq!(line, line_of(&text, &format!("center = [{MAX_SPHERES}.0")));
+        assert_eq!((field.as_str(), message.as_str()), ("spheres[128]", "at most 128 spheres"));
     }
 
     #[test]

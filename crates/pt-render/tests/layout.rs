@@ -5,8 +5,10 @@
 
 use std::mem::{offset_of, size_of};
 
+use naga::ArraySize;
 use naga::{Handle, Module, Type, TypeInner, front::spv};
-use pt_core::{AccumPixel, Camera, FrameParams, Sphere, SphereLight, Wall};
+use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
+use pt_core::{AccumPixel, Camera, FrameParams, Geometry, Sphere, SphereLight, Wall};
 use pt_render::KERNEL_SPV;
 
 fn module() -> Module {
@@ -38,11 +40,17 @@ fn bound(m: &Module, binding: u32) -> Handle<Type> {
         .unwrap_or_else(|| panic!("no global at binding {binding}"))
 }
 
-/// Element struct and stride of the runtime array in the block at `binding`.
-fn array_element(m: &Module, binding: u32) -> (Handle<Type>, u32) {
-    match &m.types[member(m, bound(m, binding), 0)].inner {
-        TypeInner::Array { base, stride, .. } => (*base, *stride),
-        other => panic!("binding {binding}: expected an array, found {other:?}"),
+/// Element, stride and length (`None`: runtime-sized) of array type `ty`.
+fn array(m: &Module, ty: Handle<Type>) -> (Handle<Type>, u32, Option<u32>) {
+    match &m.types[ty].inner {
+        TypeInner::Array { base, stride, size } => {
+            let len = match size {
+                ArraySize::Constant(n) => Some(n.get()),
+                _ => None,
+            };
+            (*base, *stride, len)
+        }
+        other => panic!("expected an array, found {other:?}"),
     }
 }
 
@@ -89,25 +97,25 @@ fn frame_params_match_the_uniform_block() {
 }
 
 #[test]
-fn walls_match_the_storage_array() {
+fn geometry_matches_the_uniform_block() {
     let m = module();
-    let (wall, stride) = array_element(&m, 1);
-    assert_eq!(stride as usize, size_of::<Wall>());
-    assert_eq!(layout(&m, wall), wall_layout());
-}
+    let geometry = member(&m, bound(&m, 1), 0);
+    assert_eq!(layout(&m, geometry), host_layout!(Geometry { walls, spheres }));
 
-#[test]
-fn spheres_match_the_storage_array() {
-    let m = module();
-    let (sphere, stride) = array_element(&m, 2);
-    assert_eq!(stride as usize, size_of::<Sphere>());
+    let (wall, stride, len) = array(&m, member(&m, geometry, 0));
+    assert_eq!((stride as usize, len), (size_of::<Wall>(), Some(MAX_WALLS as u32)));
+    assert_eq!(layout(&m, wall), wall_layout());
+
+    let (sphere, stride, len) = array(&m, member(&m, geometry, 1));
+    assert_eq!((stride as usize, len), (size_of::<Sphere>(), Some(MAX_SPHERES as u32)));
     assert_eq!(layout(&m, sphere), host_layout!(Sphere { center, radius, albedo, _pad }));
 }
 
 #[test]
 fn accumulation_pixels_match_the_storage_array() {
     let m = module();
-    let (px, stride) = array_element(&m, 3);
+    let (px, stride, len) = array(&m, member(&m, bound(&m, 2), 0));
+    assert_eq!(len, None);
     assert_eq!(stride as usize, size_of::<AccumPixel>());
     assert_eq!(layout(&m, px), host_layout!(AccumPixel { sum, samples, compensation, non_finite }));
 }
@@ -121,4 +129,5 @@ fn host_layouts_are_the_documented_ones() {
     assert_eq!(size_of::<SphereLight>(), 32);
     assert_eq!(size_of::<Sphere>(), 32);
     assert_eq!(size_of::<AccumPixel>(), 32);
+    assert_eq!(size_of::<Geometry>(), 128 * 96 + 128 * 32);
 }

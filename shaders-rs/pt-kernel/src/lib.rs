@@ -2,12 +2,13 @@
 //! done by `pt-core` functions that the CPU renderer and tests also call.
 //!
 //! Bindings (descriptor set 0); `pt-render` creates the layouts:
-//! 0 `FrameParams` (uniform), 1 walls, 2 spheres, 3 accumulation buffer,
-//! 4 display buffer (RGBA8 packed in u32), 5 non-finite sample counter.
+//! 0 `FrameParams` (uniform), 1 `Geometry` (uniform: walls and spheres),
+//! 2 accumulation buffer, 3 display buffer (RGBA8 packed in u32),
+//! 4 non-finite sample counter.
 #![cfg_attr(target_arch = "spirv", no_std)]
 
 use pt_core::glam::{UVec3, Vec2, Vec4};
-use pt_core::{AccumPixel, FrameParams, Sphere, Wall, integrator, tonemap};
+use pt_core::{AccumPixel, FrameParams, Geometry, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
 
@@ -18,15 +19,14 @@ use spirv_std::spirv;
 fn accumulate_pixel(
     id: UVec3,
     params: &FrameParams,
-    walls: &[Wall],
-    spheres: &[Sphere],
+    geometry: &Geometry,
     accum: &mut [AccumPixel],
     non_finite: &mut [u32],
 ) {
     if id.x >= params.width || id.y >= params.height {
         return;
     }
-    let samples = integrator::render_pixel(id.x, id.y, params, walls, spheres);
+    let samples = integrator::render_pixel(id.x, id.y, params, geometry);
     // width != 0 always; the driver cannot know it (see `kahan_add`).
     accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
@@ -50,12 +50,11 @@ macro_rules! accumulate_entry {
         pub fn $name(
             #[spirv(global_invocation_id)] id: UVec3,
             #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] walls: &[Wall],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] spheres: &[Sphere],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] accum: &mut [AccumPixel],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] non_finite: &mut [u32],
+            #[spirv(uniform, descriptor_set = 0, binding = 1)] geometry: &Geometry,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
         ) {
-            accumulate_pixel(id, params, walls, spheres, accum, non_finite);
+            accumulate_pixel(id, params, geometry, accum, non_finite);
         }
     };
 }
@@ -70,8 +69,8 @@ accumulate_entry!(accumulate_4x4, 4, 4);
 pub fn display(
     #[spirv(global_invocation_id)] id: UVec3,
     #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] accum: &[AccumPixel],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] out: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &[AccumPixel],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] out: &mut [u32],
 ) {
     if id.x >= params.width || id.y >= params.height {
         return;
@@ -95,7 +94,7 @@ pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &
 pub fn blit_fs(
     uv: Vec2,
     #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] display: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] display: &[u32],
     color: &mut Vec4,
 ) {
     // uv * size lands on pixel centres (x + 0.5): the floor is the pixel.
