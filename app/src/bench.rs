@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pt_core::params::{FLAG_NEE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
@@ -217,7 +217,7 @@ pub struct Strategy {
 /// The strategies compared; the first is the default configuration
 /// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `render`'s 16 spp per frame), each
 /// other changes one thing.
-pub const STRATEGIES: [Strategy; 8] = [
+pub const STRATEGIES: [Strategy; 9] = [
     Strategy {
         name: "default: Sobol, NEE+MIS, RR from 5, 16 spp/frame",
         flags: FLAGS_DEFAULT,
@@ -230,7 +230,13 @@ pub const STRATEGIES: [Strategy; 8] = [
         rr_start: DEFAULT_RR_START,
         spp_per_frame: 16,
     },
-    Strategy { name: "RR from 3", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
+    Strategy { name: "RR from 3, survival = max component", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
+    Strategy {
+        name: "RR from 3, survival = luminance",
+        flags: FLAGS_DEFAULT | FLAG_RR_LUMINANCE,
+        rr_start: 3,
+        spp_per_frame: 16,
+    },
     Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 16 },
     Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE | FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
     Strategy { name: "BSDF sampling only (no NEE)", flags: FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
@@ -263,8 +269,14 @@ fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
     accum.iter().map(|p| p.mean().to_array()).collect()
 }
 
-/// Renders the reference: `spp` samples per pixel on the CPU.
-pub fn reference(scene: &Scene, settings: &RenderSettings, spp: u32) -> Result<Vec<[f32; 3]>> {
+/// Renders the reference: `spp` samples per pixel on the CPU, telling
+/// `progress` the samples per pixel done.
+pub fn reference(
+    scene: &Scene,
+    settings: &RenderSettings,
+    spp: u32,
+    mut progress: impl FnMut(u32),
+) -> Result<Vec<[f32; 3]>> {
     let params = scene.frame_params(settings, 64, REFERENCE_SEED);
     let mut r = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres())?;
     let mut done = 0;
@@ -272,6 +284,7 @@ pub fn reference(scene: &Scene, settings: &RenderSettings, spp: u32) -> Result<V
         let n = 64.min(spp - done);
         r.render_frame(n);
         done += n;
+        progress(done);
     }
     Ok(means(r.accum()))
 }

@@ -74,13 +74,13 @@ struct BenchArgs {
     #[arg(long)]
     reference: Option<PathBuf>,
     /// Image width of the convergence runs.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
     width: u32,
     /// Image height of the convergence runs.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=4096))]
     height: u32,
     /// Largest sample count of a convergence run (a power of two).
-    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(4..=1_048_576))]
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(4..=1_048_576))]
     max_spp: u32,
     /// Independent seeds per convergence configuration.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(2..=100))]
@@ -516,7 +516,13 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
                     "rendering the reference: {ref_spp} spp at {}x{} on the CPU (100x the largest budget)",
                     args.width, args.height
                 );
-                let r = bench::reference(&scene, &settings, ref_spp)?;
+                let bar = ProgressBar::new(ref_spp as u64);
+                bar.set_style(
+                    ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed_precise} (eta {eta})")
+                        .expect("valid progress template"),
+                );
+                let r = bench::reference(&scene, &settings, ref_spp, |done| bar.set_position(done as u64))?;
+                bar.finish_and_clear();
                 output::write_exr(&args.out_dir.join("reference.exr"), args.width, args.height, &r)?;
                 r
             }

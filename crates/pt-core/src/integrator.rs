@@ -7,7 +7,7 @@ use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use crate::light::light_cone;
 use crate::params::FLAG_SOBOL;
-use crate::params::{FLAG_MIS, FLAG_NEE, FrameParams};
+use crate::params::{FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FrameParams};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
@@ -273,7 +273,13 @@ impl<S: Sampler> Path<S> {
         // Russian roulette: survive with a probability that follows the
         // throughput, and divide by it so the estimate stays unbiased.
         if self.bounces >= params.rr_start {
-            let survive = self.throughput.max_element().clamp(RR_MIN_SURVIVAL, 1.0);
+            let t = self.throughput;
+            let follow = if params.flags & FLAG_RR_LUMINANCE != 0 {
+                t.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+            } else {
+                t.max_element()
+            };
+            let survive = follow.clamp(RR_MIN_SURVIVAL, 1.0);
             if self.sampler.next_1d() >= survive {
                 return true;
             }

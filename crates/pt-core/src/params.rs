@@ -15,6 +15,10 @@ pub const FLAG_MIS: u32 = 2;
 /// `flags` bit: samples from the Owen-scrambled Sobol sequence instead of
 /// independent PCG streams.
 pub const FLAG_SOBOL: u32 = 4;
+/// `flags` bit: Russian roulette survives with the throughput's luminance
+/// (Rec. 709 weights) instead of its largest component: shorter paths after
+/// strongly coloured bounces, at the price of more colour noise there.
+pub const FLAG_RR_LUMINANCE: u32 = 8;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// with MIS, on Owen-scrambled Sobol samples.
 pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS | FLAG_SOBOL;

@@ -13,7 +13,7 @@
 use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
-use pt_core::params::{FLAG_NEE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::ray::offset_origin;
 use pt_core::rng::Rng;
 use pt_core::sampling::cosine_hemisphere;
@@ -468,11 +468,12 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 4] = [
+    let variants: [Variant; 5] = [
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),
         ("MIS off (NEE only after a bounce)", |s| s.flags = FLAG_NEE),
         ("Russian roulette off", |s| s.settings.rr_start = 1_000_000),
+        ("Russian roulette following luminance", |s| s.flags |= FLAG_RR_LUMINANCE),
     ];
     for (name, change) in variants {
         let mut v = default_small();
