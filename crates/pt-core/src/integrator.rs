@@ -243,9 +243,17 @@ impl<S: Sampler> Path<S> {
         let n = if normal.dot(ray.dir) < 0.0 { normal } else { -normal };
         let origin = offset_origin(p, n, magnitude);
 
-        // Next-event estimation: one shadow ray toward the light's cone.
-        let cone = light_cone(&light, origin);
+        // Next-event estimation: one shadow ray toward the light's cone. The
+        // cone is seen from the hit point itself: from the offset origin,
+        // nearer the light, it would be brighter by twice the offset over
+        // the distance (8e-6 in the spherical-room accuracy case).
+        let cone = light_cone(&light, p);
         let cone_pdf = cone.pdf();
+        // At the last vertex NEE takes all of the light's MIS weight and the
+        // BSDF ray none (weights that sum to one per direction keep MIS
+        // unbiased; Veach 1997, section 9.2): that ray could then only add
+        // background, and with a black one it is not traced.
+        let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
         if nee && !cone.is_empty() {
             let u = self.sampler.next_2d();
             let (dir, dist) = cone.sample(u.x, u.y);
@@ -255,17 +263,23 @@ impl<S: Sampler> Path<S> {
                 rays.ray();
                 if !occluded(&shadow, params, geometry, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
-                    let weight = if mis { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
+                    let weight = if mis && !last { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
                     self.radiance += self.throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
                 }
             }
         }
 
-        // BSDF sampling: cosine-weighted, so f cos / pdf = albedo.
+        if last && params.background.max_element() == 0.0 {
+            return true;
+        }
+
+        // BSDF sampling: cosine-weighted, so f cos / pdf = albedo. After the
+        // last vertex a BSDF-found light has MIS weight 0: its pdf is kept as
+        // 0 for `power_heuristic`.
         let u = self.sampler.next_2d();
         let dir = cosine_hemisphere(n, u.x, u.y);
-        self.bsdf_pdf = n.dot(dir).max(0.0) * (1.0 / PI);
+        self.bsdf_pdf = if last { 0.0 } else { n.dot(dir).max(0.0) * (1.0 / PI) };
         self.nee_pdf = cone_pdf;
         self.throughput *= albedo;
         self.bounces += 1;
