@@ -15,9 +15,9 @@ use bytemuck::{Pod, Zeroable};
 use crate::sphere::Sphere;
 use crate::wall::Wall;
 
-/// Most walls a scene may have. With [`MAX_SPHERES`] it keeps the block at
-/// 16 KiB, the smallest uniform-block size Vulkan guarantees.
-pub const MAX_WALLS: usize = 128;
+/// Most walls a scene may have. With [`MAX_SPHERES`] it keeps the block
+/// within 16 KiB, the smallest uniform-block size Vulkan guarantees.
+pub const MAX_WALLS: usize = 96;
 
 /// Most spheres (besides the light) a scene may have.
 pub const MAX_SPHERES: usize = 128;

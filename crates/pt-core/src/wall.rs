@@ -17,7 +17,7 @@ pub const EDGE_SLACK: f32 = 1e-5;
 
 /// A planar parallelogram `corner + a * edge_u + b * edge_v`, a, b in [0, 1],
 /// as the kernel reads it. Build it with [`Wall::new`], which derives the
-/// normal and `w` from the edges.
+/// normal and the coordinate vectors from the edges.
 #[repr(C)]
 #[derive(Copy, Clone, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Wall {
@@ -38,16 +38,22 @@ pub struct Wall {
     pub normal: Vec3,
     /// Padding.
     pub _pad3: f32,
-    /// `(edge_u x edge_v) / |edge_u x edge_v|^2`: `w . (q x edge_v)` and
-    /// `w . (edge_u x q)` are the parametric coordinates of a point `q`
-    /// relative to `corner` (Shirley, "Ray Tracing: The Next Week", 6.4).
-    pub w: Vec3,
+    /// `edge_v x w` with `w = (edge_u x edge_v) / |edge_u x edge_v|^2`:
+    /// `q . coord_u` is the coordinate `a` of a point `q` relative to
+    /// `corner`. It equals `w . (q x edge_v)` (Shirley, "Ray Tracing: The
+    /// Next Week", 6.4) by the scalar triple product, one dot product
+    /// instead of a cross and a dot per test.
+    pub coord_u: Vec3,
     /// Padding.
     pub _pad4: f32,
+    /// `w x edge_u`: `q . coord_v` is the coordinate `b`.
+    pub coord_v: Vec3,
+    /// Padding.
+    pub _pad5: f32,
     /// Diffuse reflectance per RGB channel, each in [0, 1].
     pub albedo: Vec3,
     /// Padding to a 16-byte multiple.
-    pub _pad5: f32,
+    pub _pad6: f32,
 }
 
 impl Wall {
@@ -57,7 +63,8 @@ impl Wall {
         let n = edge_u.cross(edge_v);
         let n2 = n.dot(n);
         let (normal, w) = if n2 > 0.0 { (n / n2.sqrt(), n / n2) } else { (Vec3::ZERO, Vec3::ZERO) };
-        Self { corner, edge_u, edge_v, normal, w, albedo, ..Self::default() }
+        let (coord_u, coord_v) = (edge_v.cross(w), w.cross(edge_u));
+        Self { corner, edge_u, edge_v, normal, coord_u, coord_v, albedo, ..Self::default() }
     }
 
     /// Area of the parallelogram.
@@ -83,8 +90,8 @@ pub fn intersect_wall(wall: &Wall, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
         return t_max;
     }
     let q = ray.at(t) - wall.corner;
-    let a = wall.w.dot(q.cross(wall.edge_v));
-    let b = wall.w.dot(wall.edge_u.cross(q));
+    let a = q.dot(wall.coord_u);
+    let b = q.dot(wall.coord_v);
     let lo = -EDGE_SLACK;
     let hi = 1.0 + EDGE_SLACK;
     if a >= lo && a <= hi && b >= lo && b <= hi { t } else { t_max }
@@ -102,8 +109,11 @@ mod tests {
     fn derived_fields_are_exact_for_an_axis_aligned_wall() {
         let w = floor();
         assert_eq!(w.normal, Vec3::Y);
-        assert_eq!(w.w, Vec3::new(0.0, 0.25, 0.0));
+        assert_eq!((w.coord_u, w.coord_v), (Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 0.0, -0.5)));
         assert_eq!(w.area(), 4.0);
+        // The edges' far ends have coordinates 1.
+        assert_eq!((w.edge_u.dot(w.coord_u), w.edge_u.dot(w.coord_v)), (1.0, 0.0));
+        assert_eq!((w.edge_v.dot(w.coord_u), w.edge_v.dot(w.coord_v)), (0.0, 1.0));
     }
 
     #[test]

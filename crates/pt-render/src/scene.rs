@@ -572,12 +572,12 @@ mod tests {
         let text = format!("{DEFAULT_SCENE_TOML}{full}{}", wall(MAX_WALLS));
         let (line, field, message) = invalid(&text);
         assert_eq!(line, line_of(&text, &format!("corner = [{MAX_WALLS}.0")));
-        assert_eq!((field.as_str(), message.as_str()), ("walls[128]", "at most 128 walls"));
+        assert_eq!((field, message), (format!("walls[{MAX_WALLS}]"), format!("at most {MAX_WALLS} walls")));
 
         let text = format!("{DEFAULT_SCENE_TOML}{full}{}", sphere(MAX_SPHERES));
         let (line, field, message) = invalid(&text);
         assert_eq!(line, line_of(&text, &format!("center = [{MAX_SPHERES}.0")));
-        assert_eq!((field.as_str(), message.as_str()), ("spheres[128]", "at most 128 spheres"));
+        assert_eq!((field, message), (format!("spheres[{MAX_SPHERES}]"), format!("at most {MAX_SPHERES} spheres")));
     }
 
     #[test]
