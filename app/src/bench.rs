@@ -373,9 +373,16 @@ pub fn convergence(
     }
     backends.push((None, format!("CPU: {} threads", rayon::current_num_threads())));
     for (c, name) in &backends {
-        for st in &STRATEGIES {
-            progress(&format!("{name}: {}", st.name));
-            for seed in 0..seeds {
+        // Untimed warm-up: the first renders of a run were measured up to
+        // 30% slower (driver and machine warming up), which would have
+        // penalised whichever strategy came first.
+        progress(&format!("{name}: warm-up"));
+        curve(*c, scene, settings, &STRATEGIES[0], 99, max_spp.min(64), reference, name)?;
+        // Seeds outer, strategies inner: any drift of the machine's speed
+        // during the run is spread over all strategies alike.
+        for seed in 0..seeds {
+            progress(&format!("{name}: seed {} of {seeds}, all strategies", seed + 1));
+            for st in &STRATEGIES {
                 points.extend(curve(*c, scene, settings, st, 100 + seed, max_spp, reference, name)?);
             }
         }

@@ -574,7 +574,7 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
         if let Some(m) = &args.mitsuba_csv {
             report.push_str(&mitsuba_section(m, &points)?);
         }
-        report.push_str(DEFAULTS_SECTION);
+        report.push_str(&defaults_section(&points));
     }
 
     if let Some(path) = &args.report {
@@ -603,28 +603,69 @@ untimed, then timed); each of its points is one render from scratch at that samp
 mean of 3 seeds. Our points are the progressive renders above (default strategy). Times to \
 relMSE 1e-3 are interpolated log-log.\n\n";
 
-const DEFAULTS_SECTION: &str = "\n## Defaults chosen from these measurements\n\n\
-- Samples: Owen-scrambled Sobol (Burley 2020). Against independent PCG samples it reaches \
-relMSE 1e-3 about twice as soon on both backends.\n\
-- Russian roulette from bounce 5, i.e. none within the default 5 bounces: roulette from \
-bounce 3 or 1 was slower to the target on both backends (its random cut-offs undo part of \
-Sobol's stratification); it stays for deeper bounce limits, where it bounds path length.\n\
-- 16 samples per pixel per frame for `render` (fewer dispatches: each lavapipe submission \
-has a fixed cost of several milliseconds); the viewer adapts its count to a frame budget.\n\
-- NEE with MIS is kept: NEE alone came within a few percent of it across runs (ahead in \
-some, behind in others): the default light is small (sin a = 0.09 from the floor), where \
-BSDF samples rarely hit it, and MIS is what keeps large or close lights from producing \
-fireflies.\n\
-- Workgroup shape: 8x8 stays the default. The throughput table times 16x4, 32x2 and 4x4 on \
-the 512x512 configuration; on lavapipe the shape only changes how invocations are batched \
-into its 8-wide SIMD, and a real GPU's answer may differ: measure there before changing it.\n\
-- Not compared in this report: the survival rule of roulette (one rule, \
-clamp(max throughput, 0.05, 1)).\n\n\
-## NVIDIA H100 / H200\n\n\
-Not measured: no GPU machine was lent to the session that wrote this report. To measure, \
-run `pathtracer bench throughput --backend gpu` on such a machine (the kernel is embedded in \
-the release binary; see DESIGN section 9) and add its figures here with the GPU and driver \
-named.\n";
+/// The defaults and the measurements behind each: how much longer (or
+/// shorter) each alternative took to relMSE 1e-3 than the default, per
+/// backend, from `points`.
+fn defaults_section(points: &[bench::Point]) -> String {
+    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
+    backends.dedup();
+    let time = |backend: &str, strategy: &str| {
+        bench::time_to(&bench::time_error(&bench::mean_curve(points, backend, strategy)), 1e-3)
+    };
+    // "GPU ... 2.05x, CPU ... 1.91x": time of `a` over time of `b`.
+    let ratio = |a: &str, b: &str| {
+        backends
+            .iter()
+            .map(|backend| {
+                let label = backend.split(':').next().unwrap_or(backend);
+                match (time(backend, a), time(backend, b)) {
+                    (Some(x), Some(y)) => format!("{label} {:.2}x", x / y),
+                    _ => format!("{label}: not reached within the budget"),
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let default = bench::STRATEGIES[0].name;
+    let vs_default = |i: usize| ratio(bench::STRATEGIES[i].name, default);
+    format!(
+        "\n## Defaults chosen from these measurements\n\n\
+         Each figure is the time an alternative took to reach relMSE 1e-3, as a multiple of the default's \
+         time on the same backend (above 1: the default is faster).\n\n\
+         - Samples: Owen-scrambled Sobol (Burley 2020). Independent PCG samples: {}.\n\
+         - Russian roulette from bounce 5, i.e. none within the default 5 bounces. From bounce 3: {}; from \
+         bounce 1: {}. Its random cut-offs undo part of Sobol's stratification; it stays for deeper bounce \
+         limits, where it bounds path length.\n\
+         - Survival rule: the throughput's largest component, clamped to [0.05, 1]. Following luminance \
+         instead, both from bounce 3, took {} the time of the largest-component rule (after the red and green \
+         walls luminance ends more paths: shorter paths, more colour noise there).\n\
+         - 16 samples per pixel per frame for `render` (fewer dispatches; each lavapipe submission has a fixed \
+         cost of several milliseconds). 4 per frame: {}; 1 per frame: {}. The viewer adapts its count to a \
+         frame budget.\n\
+         - NEE with MIS. NEE alone: {}; BSDF sampling alone: {}. The default light is small (sin a = 0.09 \
+         from the floor), where BSDF samples rarely find it: the two estimators have the same error here and \
+         differ only by the machine's drift (`pathtracer render` at 256x256, 256 spp, three runs each on \
+         lavapipe: 3.25-3.36e6 samples/s with MIS, 2.96-3.33e6 without). MIS is kept for large or close \
+         lights, where the cosine varies across the light's cone and BSDF samples carry part of the estimate \
+         with less variance; at the last vertex NEE takes the whole weight and no BSDF ray is traced.\n\
+         - Workgroup shape: 8x8 stays the default. The throughput table times 16x4, 32x2 and 4x4 on the \
+         512x512 configuration; on lavapipe the shape only changes how invocations are batched into its \
+         8-wide SIMD (4 wide rows leave half of each vector empty), and a real GPU's answer may differ: \
+         measure there before changing it.\n\n\
+         ## NVIDIA H100 / H200\n\n\
+         Not measured: no GPU machine was lent to the session that wrote this report. To measure, run \
+         `pathtracer bench throughput --backend gpu` on such a machine (the kernel is embedded in the release \
+         binary; see DESIGN section 9) and add its figures here with the GPU and driver named.\n",
+        vs_default(1),
+        vs_default(2),
+        vs_default(4),
+        ratio(bench::STRATEGIES[3].name, bench::STRATEGIES[2].name),
+        vs_default(7),
+        vs_default(8),
+        vs_default(5),
+        vs_default(6),
+    )
+}
 
 /// The Mitsuba comparison: time to relMSE 1e-3, ours against Mitsuba's.
 fn mitsuba_section(csv: &PathBuf, points: &[bench::Point]) -> Result<String> {
