@@ -227,7 +227,7 @@ impl Kernel {
         let trace_layout = bind_group_layout(
             device,
             "accumulate",
-            &[geometry_entry(), storage_entry(2, false), storage_entry(4, false)],
+            &[uniform_entry::<Geometry>(1), storage_entry(2, false), storage_entry(4, false)],
         );
         let display_layout = bind_group_layout(device, "display", &[storage_entry(2, true), storage_entry(3, false)]);
         let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
@@ -292,37 +292,28 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// The uniform `Geometry` block at binding 1.
-fn geometry_entry() -> wgpu::BindGroupLayoutEntry {
+/// A uniform block of type `T` at `binding`, for the compute stage.
+fn uniform_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
-        binding: 1,
+        binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
             has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(size_of::<Geometry>() as u64),
+            min_binding_size: wgpu::BufferSize::new(size_of::<T>() as u64),
         },
         count: None,
     }
 }
 
-/// A layout of the uniform `FrameParams` at binding 0 plus `storage`.
+/// A layout of the uniform `FrameParams` at binding 0 plus `others`.
 fn bind_group_layout(
     device: &wgpu::Device,
     label: &str,
-    storage: &[wgpu::BindGroupLayoutEntry],
+    others: &[wgpu::BindGroupLayoutEntry],
 ) -> wgpu::BindGroupLayout {
-    let mut entries = vec![wgpu::BindGroupLayoutEntry {
-        binding: 0,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
-        },
-        count: None,
-    }];
-    entries.extend_from_slice(storage);
+    let mut entries = vec![uniform_entry::<FrameParams>(0)];
+    entries.extend_from_slice(others);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
 }
 
