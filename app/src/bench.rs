@@ -393,7 +393,8 @@ pub fn convergence(
 /// One sample count of a strategy's curve, over its seeds.
 #[derive(Copy, Clone, Debug)]
 pub struct CurvePoint {
-    /// Mean seconds.
+    /// Median seconds: the machine is shared, and a single run can be
+    /// slowed by half by other work; the median ignores such a spike.
     pub time: f64,
     /// Mean relMSE.
     pub rel_mse: f64,
@@ -403,7 +404,8 @@ pub struct CurvePoint {
     pub rel_mse_max: f64,
 }
 
-/// Mean and spread over seeds at each sample count of a curve.
+/// Median time, mean relMSE and its spread over seeds at each sample count
+/// of a curve.
 pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<CurvePoint> {
     let mut spps: Vec<u32> =
         points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.spp).collect();
@@ -414,8 +416,9 @@ pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<CurveP
             let sel: Vec<&Point> =
                 points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.spp == spp).collect();
             let n = sel.len() as f64;
+            let (time, _, _) = median_min_max(sel.iter().map(|p| p.time).collect());
             CurvePoint {
-                time: sel.iter().map(|p| p.time).sum::<f64>() / n,
+                time,
                 rel_mse: sel.iter().map(|p| p.rel_mse).sum::<f64>() / n,
                 rel_mse_min: sel.iter().map(|p| p.rel_mse).fold(f64::MAX, f64::min),
                 rel_mse_max: sel.iter().map(|p| p.rel_mse).fold(0.0, f64::max),
@@ -538,7 +541,7 @@ pub fn plot(path: &Path, points: &[Point], extra: &[(String, Vec<(f64, f64)>)]) 
     let root = BitMapBackend::new(path, (1100, 750)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
-        .caption("relMSE against time (mean of seeds), default scene", ("sans-serif", 24))
+        .caption("relMSE against time (median time, mean relMSE of seeds), default scene", ("sans-serif", 24))
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)

@@ -558,7 +558,10 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
         report.push_str(&format!(
             "## Error against time\n\nScene: {}; {}x{} pixels, {} bounces; {} seeds per strategy; errors against {}. \
              Each strategy renders progressively to {} spp; errors are measured at 4, 8, 16, ... spp, with time \
-             counted around synchronised frames only (readback and evaluation excluded). Equal time is the \
+             counted around synchronised frames only (readback and evaluation excluded). An untimed warm-up \
+             render comes first, then every strategy once per seed in turn; each point takes the median time \
+             and the mean relMSE of the seeds (the machine is shared: a single run can be slowed by half). \
+             Equal time is the \
              shortest total time of any strategy; times to relMSE 1e-3 are interpolated log-log between \
              measurements.\n\n![relMSE against time]({})\n\nAll points: `{}`.\n{table}\n",
             args.scene.as_ref().map_or("the built-in default scene".to_string(), |p| p.display().to_string()),
@@ -600,7 +603,7 @@ independent sampler, box pixel filter, the light a black-BSDF sphere with an are
 walls two-sided diffuse) on the same machine, at the same resolution, against the same \
 reference. Mitsuba's kernels are compiled before timing (each sample count is rendered once \
 untimed, then timed); each of its points is one render from scratch at that sample count, \
-mean of 3 seeds. Our points are the progressive renders above (default strategy). Times to \
+with the median time and mean relMSE of its seeds, as ours. Our points are the progressive renders above (default strategy). Times to \
 relMSE 1e-3 are interpolated log-log.\n\n";
 
 /// The defaults and the measurements behind each: how much longer (or

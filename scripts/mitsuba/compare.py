@@ -3,7 +3,7 @@
 
 Renders the scene with Mitsuba 3 (llvm_ad_rgb, `path` integrator, max_depth =
 max_bounces + 1, box filter; see render.py for the translation) at 4, 8, ...,
-MAX spp and writes `time_s,rel_mse` (mean over seeds) against REFERENCE.exr,
+MAX spp and writes `time_s,rel_mse` (median time, mean relMSE over seeds) against REFERENCE.exr,
 which `pathtracer bench convergence` writes (our CPU renderer, 100x the
 largest budget).
 
@@ -66,7 +66,7 @@ def main():
             times.append(time.perf_counter() - start)
             a = np.array(img, dtype=np.float64)[:, :, :3]
             errors.append(float(np.mean((a - ref) ** 2 / (ref**2 + 0.01))))
-        rows.append((float(np.mean(times)), float(np.mean(errors)), spp))
+        rows.append((float(np.median(times)), float(np.mean(errors)), spp))
         print(f"mitsuba {spp} spp: {rows[-1][0]:.4f} s, relMSE {rows[-1][1]:.4e}", file=sys.stderr)
         spp *= 2
     with open(args.out, "w") as f:
