@@ -156,3 +156,29 @@ fn every_workgroup_shape_renders_the_same_image() {
         assert_eq!(render(shape), reference, "shape {:?}", pt_render::gpu::WORKGROUP_SHAPES[shape]);
     }
 }
+
+/// `set_geometry` replaces the walls and spheres in place: a renderer made
+/// for one scene and switched to another renders, seed for seed, what a
+/// renderer made for the other renders (same device, same samples).
+#[test]
+fn set_geometry_renders_the_new_scene() {
+    let before = Scene::default_scene();
+    let mut after = Scene::default_scene();
+    after.spheres.pop();
+    after.walls[0].wall.albedo = pt_core::glam::Vec3::new(0.2, 0.9, 0.2);
+    let settings = RenderSettings { width: 32, height: 32, spp: 8, ..before.render };
+    let ctx = gpu();
+    let expected = render_gpu(&ctx, &after, &settings, 8, 7);
+
+    let mut r =
+        GpuRenderer::new(&ctx, before.frame_params(&settings, 8, 7), &before.gpu_walls(), &before.gpu_spheres())
+            .unwrap();
+    r.submit_frame(8);
+    r.reset();
+    r.set_geometry(&after.gpu_walls(), &after.gpu_spheres()).unwrap();
+    r.submit_frame(8);
+    let got = r.read_accum(&ctx).unwrap();
+    assert_eq!(means(&got), means(&expected));
+    // The change is visible: the first render differs.
+    assert_ne!(means(&got), means(&render_gpu(&ctx, &before, &settings, 8, 7)));
+}

@@ -312,11 +312,7 @@ fn render(args: &RenderArgs) -> Result<()> {
         settings.width, settings.height, settings.spp, settings.max_bounces, args.seed
     );
 
-    let bar = ProgressBar::new(settings.spp as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed_precise} (eta {eta})")
-            .expect("valid progress template"),
-    );
+    let bar = spp_progress_bar(settings.spp);
     bar.enable_steady_tick(Duration::from_millis(200));
     let (accum, stats) =
         render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| bar.set_position(done as u64))
@@ -516,11 +512,7 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
                     "rendering the reference: {ref_spp} spp at {}x{} on the CPU (100x the largest budget)",
                     args.width, args.height
                 );
-                let bar = ProgressBar::new(ref_spp as u64);
-                bar.set_style(
-                    ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed_precise} (eta {eta})")
-                        .expect("valid progress template"),
-                );
+                let bar = spp_progress_bar(ref_spp);
                 let r = bench::reference(&scene, &settings, ref_spp, |done| bar.set_position(done as u64))?;
                 bar.finish_and_clear();
                 output::write_exr(&args.out_dir.join("reference.exr"), args.width, args.height, &r)?;
@@ -668,6 +660,16 @@ fn defaults_section(points: &[bench::Point]) -> String {
         vs_default(5),
         vs_default(6),
     )
+}
+
+/// A progress bar over `spp` samples per pixel, with elapsed time and ETA.
+fn spp_progress_bar(spp: u32) -> ProgressBar {
+    let bar = ProgressBar::new(spp as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} spp  {elapsed_precise} (eta {eta})")
+            .expect("valid progress template"),
+    );
+    bar
 }
 
 /// The Mitsuba comparison: time to relMSE 1e-3, ours against Mitsuba's.

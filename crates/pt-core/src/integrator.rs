@@ -362,7 +362,9 @@ fn pixel_samples<S: Sampler, C: RayCounter>(
                 out.non_finite += 1;
             }
             s += 1;
-            path = Path::camera(x, y, s, params);
+            if s < params.samples_per_frame {
+                path = Path::camera(x, y, s, params);
+            }
         }
     }
     out

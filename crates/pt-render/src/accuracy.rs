@@ -19,11 +19,12 @@ use pt_core::rng::Rng;
 use pt_core::sampling::cosine_hemisphere;
 use pt_core::sphere::{intersect_sphere, sphere_hit_point};
 use pt_core::wall::intersect_wall;
-use pt_core::{AccumPixel, FrameParams, Ray, Sphere, SphereLight, Wall, integrator, light};
+use pt_core::{FrameParams, Ray, Sphere, SphereLight, Wall, integrator, light};
 use rayon::prelude::*;
 
 use crate::gpu::{GpuContext, GpuError};
 use crate::metrics::{mean_and_stderr, region_means};
+use crate::renderer::render_accum;
 use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
 use crate::stats::{SphereBins, chi2_test};
 
@@ -116,21 +117,12 @@ impl Target<'_> {
         }
     }
 
-    /// Renders `spp` samples per pixel with `params` and returns the
-    /// accumulation.
-    fn render(
-        &self,
-        params: FrameParams,
-        walls: &[Wall],
-        spheres: &[Sphere],
-        spp: u32,
-        per_frame: u32,
-    ) -> Result<Vec<AccumPixel>, GpuError> {
-        let ctx = match self {
+    /// The context `render_accum` renders on: none for the CPU.
+    fn ctx(&self) -> Option<&GpuContext> {
+        match self {
             Target::Cpu => None,
             Target::Gpu(ctx) => Some(*ctx),
-        };
-        crate::renderer::render_accum(ctx, params, walls, spheres, spp, per_frame)
+        }
     }
 }
 
@@ -175,13 +167,8 @@ impl Setup {
         let mut images = Vec::new();
         let mut bad = 0;
         for seed in seeds {
-            let accum = t.render(
-                self.params(seed),
-                &self.scene.gpu_walls(),
-                &self.scene.gpu_spheres(),
-                self.settings.spp,
-                256,
-            )?;
+            let (walls, spheres) = (self.scene.gpu_walls(), self.scene.gpu_spheres());
+            let accum = render_accum(t.ctx(), self.params(seed), &walls, &spheres, self.settings.spp, 256)?;
             bad += accum.iter().map(|p| p.non_finite as u64).sum::<u64>();
             images.push(accum.iter().map(|p| p.mean().to_array()).collect());
         }
@@ -570,7 +557,7 @@ fn accumulation(t: &Target, size: Size, out: &mut Vec<CaseResult>) -> Result<(),
     // The case is about the sum, not the samples: independent ones are the
     // cheapest to draw 2^25 times on one GPU invocation.
     setup.flags &= !FLAG_SOBOL;
-    let accum = t.render(setup.params(0), &[], &[], spp, 1 << 16)?;
+    let accum = render_accum(t.ctx(), setup.params(0), &[], &[], spp, 1 << 16)?;
     let p = accum[0];
     let expected = 0.1f32 as f64;
     let measured = p.mean().x as f64;

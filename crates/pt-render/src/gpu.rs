@@ -432,12 +432,13 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Replaces the geometry (walls and spheres).
+    /// Replaces the geometry (walls and spheres). The block has a fixed
+    /// size, so it is rewritten in place (ordered before the next frame).
     pub fn set_geometry(&mut self, walls: &[Wall], spheres: &[Sphere]) -> Result<(), GpuError> {
-        self.geometry_buf = geometry_buffer(&self.device, walls, spheres)?;
+        let geometry = crate::scene::geometry(walls, spheres)?;
+        self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&geometry));
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
-        self.rebind();
         Ok(())
     }
 
