@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pt_core::params::{FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
@@ -217,9 +217,9 @@ pub struct Strategy {
 /// The strategies compared; the first is the default configuration
 /// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `render`'s 16 spp per frame), each
 /// other changes one thing.
-pub const STRATEGIES: [Strategy; 9] = [
+pub const STRATEGIES: [Strategy; 10] = [
     Strategy {
-        name: "default: Sobol, NEE+MIS, RR from 5, 16 spp/frame",
+        name: "default: Sobol, NEE+MIS, glow lobe, RR from 5, 16 spp/frame",
         flags: FLAGS_DEFAULT,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: 16,
@@ -238,8 +238,24 @@ pub const STRATEGIES: [Strategy; 9] = [
         spp_per_frame: 16,
     },
     Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 16 },
-    Strategy { name: "NEE only (no MIS)", flags: FLAG_NEE | FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
-    Strategy { name: "BSDF sampling only (no NEE)", flags: FLAG_SOBOL, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
+    Strategy {
+        name: "NEE only (no MIS)",
+        flags: FLAGS_DEFAULT & !FLAG_MIS,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 16,
+    },
+    Strategy {
+        name: "BSDF sampling only (no NEE)",
+        flags: FLAGS_DEFAULT & !(FLAG_NEE | FLAG_MIS),
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 16,
+    },
+    Strategy {
+        name: "cosine lobe only (no glow lobe)",
+        flags: FLAGS_DEFAULT & !FLAG_GLOW,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 16,
+    },
     Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
     Strategy { name: "1 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 1 },
 ];

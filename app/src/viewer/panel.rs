@@ -2,7 +2,7 @@
 
 use egui::{Color32, RichText, Ui};
 use pt_core::glam::Vec3;
-use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
 
 use super::settings::{SamplesPerFrame, ViewSettings};
 
@@ -166,8 +166,12 @@ fn render(ui: &mut Ui, s: &mut ViewSettings, actions: &mut Actions) {
             ui.add_enabled(nee, egui::Checkbox::new(&mut mis, "MIS"));
             let mut sobol = s.flags & FLAG_SOBOL != 0;
             ui.checkbox(&mut sobol, "Sobol");
-            s.flags =
-                if nee { FLAG_NEE } else { 0 } | if mis { FLAG_MIS } else { 0 } | if sobol { FLAG_SOBOL } else { 0 };
+            let mut glow = s.flags & FLAG_GLOW != 0;
+            ui.checkbox(&mut glow, "glow lobe").on_hover_text("BSDF sampling also aims around the light");
+            // Only the switches shown here change; other flags are kept.
+            for (bit, on) in [(FLAG_NEE, nee), (FLAG_MIS, mis), (FLAG_SOBOL, sobol), (FLAG_GLOW, glow)] {
+                s.flags = if on { s.flags | bit } else { s.flags & !bit };
+            }
         });
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.paused, "pause");

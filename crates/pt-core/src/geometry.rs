@@ -14,6 +14,8 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::sphere::Sphere;
 use crate::wall::Wall;
+#[cfg(not(target_arch = "spirv"))]
+use spirv_std::glam::Vec3;
 
 /// Most walls a scene may have. With [`MAX_SPHERES`] it keeps the block
 /// within 16 KiB, the smallest uniform-block size Vulkan guarantees.
@@ -45,7 +47,50 @@ impl Geometry {
         let mut g = Self::zeroed();
         g.walls[..walls.len()].copy_from_slice(walls);
         g.spheres[..spheres.len()].copy_from_slice(spheres);
+        for (i, w) in g.walls[..walls.len()].iter_mut().enumerate() {
+            w.enclosure_side = enclosure_side(walls, spheres, i);
+        }
         Some(g)
+    }
+}
+
+/// The side (+1 or -1 along its normal) of wall `i`'s plane on which every
+/// other wall and sphere lies, or 0 when there are some on both sides
+/// ([`Wall::enclosure_side`]).
+///
+/// Points may stray to the wrong side by a tolerance of 1e-5 of the
+/// scene's largest coordinate: walls that meet at a seam are coplanar
+/// there up to rounding. Straying so little, a surface point could only
+/// see the light through the wall within 1e-5 of the seam; the walls'
+/// edge slack (`EDGE_SLACK`) is left out for the same reason.
+#[cfg(not(target_arch = "spirv"))]
+fn enclosure_side(walls: &[Wall], spheres: &[Sphere], i: usize) -> f32 {
+    let wall = &walls[i];
+    let corners = |w: &Wall| [w.corner, w.corner + w.edge_u, w.corner + w.edge_v, w.corner + w.edge_u + w.edge_v];
+    let others = walls.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, w)| w);
+    let scale = walls
+        .iter()
+        .flat_map(corners)
+        .map(|p| p.abs().max_element())
+        .chain(spheres.iter().map(|s| s.center.abs().max_element() + s.radius))
+        .fold(0.0f32, f32::max);
+    let tolerance = 1e-5 * scale;
+    // The signed distances' range over all other points.
+    let distance = |p: Vec3| wall.normal.dot(p - wall.corner);
+    let (mut lo, mut hi) = (0.0f32, 0.0f32);
+    for d in others.flat_map(corners).map(distance) {
+        (lo, hi) = (lo.min(d), hi.max(d));
+    }
+    for s in spheres {
+        let d = distance(s.center);
+        (lo, hi) = (lo.min(d - s.radius), hi.max(d + s.radius));
+    }
+    if lo >= -tolerance {
+        1.0
+    } else if hi <= tolerance {
+        -1.0
+    } else {
+        0.0
     }
 }
 
@@ -59,12 +104,114 @@ mod tests {
         let w = Wall::new(Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE);
         let s = Sphere::new(Vec3::ONE, 0.5, Vec3::splat(0.5));
         let g = Geometry::new(&[w], &[s, s]).unwrap();
-        assert_eq!(g.walls[0], w);
+        // The spheres lie on the wall's +z side.
+        assert_eq!(g.walls[0], Wall { enclosure_side: 1.0, ..w });
         assert_eq!(g.walls[1], Wall::zeroed());
         assert_eq!(g.spheres[1], s);
         assert_eq!(g.spheres[2], Sphere::zeroed());
         assert!(Geometry::new(&[w; MAX_WALLS], &[s; MAX_SPHERES]).is_some());
         assert!(Geometry::new(&[w; MAX_WALLS + 1], &[]).is_none());
         assert!(Geometry::new(&[], &[s; MAX_SPHERES + 1]).is_none());
+    }
+
+    /// The default scene's room: five walls of a 2x2x2 box open toward +z
+    /// (floor, ceiling, back, left, right), as in scenes/default.toml.
+    fn room() -> Vec<Wall> {
+        let v = Vec3::new;
+        let grey = Vec3::splat(0.73);
+        vec![
+            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), grey),
+            Wall::new(v(-1.0, 2.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), grey),
+            Wall::new(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), grey),
+            Wall::new(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), grey),
+            Wall::new(v(1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), grey),
+        ]
+    }
+
+    fn spheres() -> Vec<Sphere> {
+        vec![
+            Sphere::new(Vec3::new(-0.45, 0.40, -0.30), 0.40, Vec3::splat(0.73)),
+            Sphere::new(Vec3::new(0.50, 0.28, 0.35), 0.28, Vec3::splat(0.5)),
+        ]
+    }
+
+    #[test]
+    fn the_rooms_walls_enclose_the_scene_and_a_partition_does_not() {
+        let g = Geometry::new(&room(), &spheres()).unwrap();
+        let inside = Vec3::new(0.0, 1.0, 0.0);
+        for w in &g.walls[..5] {
+            // The side is the one facing into the room.
+            assert_eq!(w.enclosure_side, w.normal.dot(inside - w.corner).signum(), "{w:?}");
+        }
+        // A partition across the room has geometry on both sides; a sphere
+        // behind the back wall puts that wall between it and the room.
+        let mut walls = room();
+        walls.push(Wall::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 1.0, 0.0), Vec3::ONE));
+        let mut balls = spheres();
+        balls.push(Sphere::new(Vec3::new(0.0, 1.0, -1.5), 0.2, Vec3::ONE));
+        let g = Geometry::new(&walls, &balls).unwrap();
+        let sides: Vec<f32> = g.walls[..6].iter().map(|w| w.enclosure_side).collect();
+        assert_eq!(sides[2], 0.0, "back wall");
+        assert_eq!(sides[5], 0.0, "partition");
+        assert!(sides[..2].iter().chain(&sides[3..5]).all(|&s| s != 0.0), "{sides:?}");
+    }
+
+    /// Shadow rays from random surface points toward random points of the
+    /// light: `occluded` with the hull walls skipped answers exactly as with
+    /// every wall tested, for a light inside the room and for one behind
+    /// the back wall (which must then still cast its shadow).
+    #[test]
+    fn skipping_hull_walls_changes_no_shadow_ray() {
+        use crate::integrator::occluded;
+        use crate::light::{SphereLight, light_cone};
+        use crate::params::FrameParams;
+        use crate::ray::{Ray, offset_origin};
+        use crate::rng::Rng;
+
+        let (walls, balls) = (room(), spheres());
+        let culled = Geometry::new(&walls, &balls).unwrap();
+        let mut full = culled;
+        full.walls.iter_mut().for_each(|w| w.enclosure_side = 0.0);
+        let mut rng = Rng::new(1, 2, 3, 4, 5);
+        for (center, skipped, min_blocked) in [(Vec3::new(0.0, 1.7, 0.0), 5, 0.0), (Vec3::new(0.0, 1.0, -1.6), 4, 0.5)]
+        {
+            let light = SphereLight::new(center, 0.15, Vec3::ONE);
+            let params = FrameParams {
+                light,
+                wall_count: walls.len() as u32,
+                sphere_count: balls.len() as u32,
+                ..Default::default()
+            };
+            assert_eq!(culled.walls[..5].iter().filter(|w| w.cannot_shadow(&light)).count(), skipped);
+            let (mut rays, mut blocked) = (0, 0);
+            for i in 0..20_000u32 {
+                // A point on wall or sphere i % 7, its normal facing the light.
+                let k = (i % 7) as usize;
+                let (p, normal, skip) = if k < 5 {
+                    let w = &walls[k];
+                    (w.corner + w.edge_u * rng.next_f32() + w.edge_v * rng.next_f32(), w.normal, k as u32)
+                } else {
+                    let s = &balls[k - 5];
+                    let z = 1.0 - 2.0 * rng.next_f32();
+                    let phi = 2.0 * crate::sampling::PI * rng.next_f32();
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let d = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                    (s.center + d * s.radius, d, u32::MAX)
+                };
+                let n = if normal.dot(center - p) >= 0.0 { normal } else { -normal };
+                let origin = offset_origin(p, n, p.abs());
+                let cone = light_cone(&light, p);
+                let (dir, dist) = cone.sample(rng.next_f32(), rng.next_f32());
+                if n.dot(dir) <= 0.0 {
+                    continue;
+                }
+                let ray = Ray { origin, dir };
+                let answer = occluded(&ray, &params, &culled, skip, dist);
+                assert_eq!(answer, occluded(&ray, &params, &full, skip, dist), "ray {i} from {p}");
+                rays += 1;
+                blocked += answer as u32;
+            }
+            assert!(rays > 10_000 && blocked as f32 >= min_blocked * rays as f32, "{blocked} of {rays} blocked");
+        }
     }
 }

@@ -1,13 +1,12 @@
 //! The path loop: closest hits, next-event estimation with MIS, Russian
 //! roulette, and the per-pixel sample loop that the kernel wraps.
 
-use spirv_std::glam::Vec3;
+use spirv_std::glam::{Vec2, Vec3};
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
-use crate::light::light_cone;
-use crate::params::FLAG_SOBOL;
-use crate::params::{FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FrameParams};
+use crate::light::{GlowLobe, LightCone, light_cone};
+use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FrameParams};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
@@ -91,13 +90,17 @@ pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wa
     hit
 }
 
-/// Whether a wall or sphere blocks the ray in (0, `t_max`). The light is no
-/// occluder of itself: shadow rays end on its surface.
+/// Whether a wall or sphere blocks the shadow ray, which leaves a surface
+/// and ends on the light at `t_max`, in (0, `t_max`). The light is no
+/// occluder of itself. Walls of the scene's convex hull with the light
+/// inside ([`crate::wall::Wall::cannot_shadow`]) are not tested: in a closed room only
+/// the objects in it cast shadows, and a shadow ray costs the spheres alone.
 pub fn occluded(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> bool {
     let (wall_count, sphere_count) = counts(params);
     let mut i = 0;
     while i < wall_count {
-        if i != skip_wall && intersect_wall(&geometry.walls[i as usize], ray, 0.0, t_max) < t_max {
+        let wall = &geometry.walls[i as usize];
+        if i != skip_wall && !wall.cannot_shadow(&params.light) && intersect_wall(wall, ray, 0.0, t_max) < t_max {
             return true;
         }
         i += 1;
@@ -139,6 +142,47 @@ impl RayCounter for RayCount {
     #[inline]
     fn ray(&mut self) {
         self.0 += 1;
+    }
+}
+
+/// Probability that BSDF sampling draws from the glow lobe instead of the
+/// cosine lobe (with `FLAG_GLOW`): chosen by `pathtracer bench`.
+pub const GLOW_PROBABILITY: f32 = 0.25;
+
+/// BSDF sampling at a diffuse vertex: the cosine lobe about the shading
+/// normal, mixed with the glow lobe around the light. One draw picks a lobe
+/// with fixed probabilities and the estimate divides by the mixture's
+/// density (one-sample MIS with the balance heuristic; Veach 1997, 9.2.4),
+/// which is never below 3/4 of the cosine lobe's: no direction the BSDF
+/// reaches gets a large weight.
+struct Scatter {
+    n: Vec3,
+    glow: GlowLobe,
+    /// 0 without the glow lobe.
+    glow_probability: f32,
+}
+
+impl Scatter {
+    /// Sampling about unit normal `n`, with the glow lobe around `cone` when
+    /// `glow` is set and the cone is not empty.
+    fn new(n: Vec3, cone: &LightCone, glow: bool) -> Self {
+        let glow_probability = if glow && !cone.is_empty() { GLOW_PROBABILITY } else { 0.0 };
+        Self { n, glow: GlowLobe::new(cone), glow_probability }
+    }
+
+    /// A direction from `u` in [0, 1)^2: `u.x` picks the lobe and is
+    /// stretched back to [0, 1) for it, which keeps its stratification.
+    fn sample(&self, u: Vec2) -> Vec3 {
+        let p = self.glow_probability;
+        if u.x < p { self.glow.sample(u.x / p, u.y) } else { cosine_hemisphere(self.n, (u.x - p) / (1.0 - p), u.y) }
+    }
+
+    /// Solid-angle density of [`Scatter::sample`] at unit `dir`.
+    fn pdf(&self, dir: Vec3) -> f32 {
+        let p = self.glow_probability;
+        let cosine = self.n.dot(dir).max(0.0) * (1.0 / PI);
+        let glow = if p > 0.0 { self.glow.pdf(dir) } else { 0.0 };
+        (1.0 - p) * cosine + p * glow
     }
 }
 
@@ -254,6 +298,7 @@ impl<S: Sampler> Path<S> {
         // unbiased; Veach 1997, section 9.2): that ray could then only add
         // background, and with a black one it is not traced.
         let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
+        let scatter = Scatter::new(n, &cone, params.flags & FLAG_GLOW != 0);
         if nee && !cone.is_empty() {
             let u = self.sampler.next_2d();
             let (dir, dist) = cone.sample(u.x, u.y);
@@ -263,7 +308,7 @@ impl<S: Sampler> Path<S> {
                 rays.ray();
                 if !occluded(&shadow, params, geometry, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
-                    let weight = if mis && !last { power_heuristic(cone_pdf, bsdf) } else { 1.0 };
+                    let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
                     self.radiance += self.throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
                 }
@@ -274,14 +319,20 @@ impl<S: Sampler> Path<S> {
             return true;
         }
 
-        // BSDF sampling: cosine-weighted, so f cos / pdf = albedo. After the
-        // last vertex a BSDF-found light has MIS weight 0: its pdf is kept as
-        // 0 for `power_heuristic`.
-        let u = self.sampler.next_2d();
-        let dir = cosine_hemisphere(n, u.x, u.y);
-        self.bsdf_pdf = if last { 0.0 } else { n.dot(dir).max(0.0) * (1.0 / PI) };
+        // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
+        // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
+        // the surface carries nothing and ends the path. After the last
+        // vertex a BSDF-found light has MIS weight 0: its pdf is kept as 0 for
+        // `power_heuristic`.
+        let dir = scatter.sample(self.sampler.next_2d());
+        let cos = n.dot(dir);
+        let pdf = scatter.pdf(dir);
+        if !(cos > 0.0 && pdf > 0.0) {
+            return true;
+        }
+        self.bsdf_pdf = if last { 0.0 } else { pdf };
         self.nee_pdf = cone_pdf;
-        self.throughput *= albedo;
+        self.throughput *= albedo * (cos * (1.0 / PI) / pdf);
         self.bounces += 1;
 
         // Russian roulette: survive with a probability that follows the

@@ -19,9 +19,12 @@ pub const FLAG_SOBOL: u32 = 4;
 /// (Rec. 709 weights) instead of its largest component: shorter paths after
 /// strongly coloured bounces, at the price of more colour noise there.
 pub const FLAG_RR_LUMINANCE: u32 = 8;
+/// `flags` bit: BSDF sampling mixes the glow lobe around the light
+/// (`light::GlowLobe`) into the cosine lobe.
+pub const FLAG_GLOW: u32 = 16;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
-/// with MIS, on Owen-scrambled Sobol samples.
-pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS | FLAG_SOBOL;
+/// with MIS and the glow lobe, on Owen-scrambled Sobol samples.
+pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_MIS | FLAG_SOBOL | FLAG_GLOW;
 
 /// `tonemap`: clamp to [0, 1] (no curve).
 pub const TONEMAP_CLAMP: u32 = 0;

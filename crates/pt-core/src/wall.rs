@@ -6,6 +6,7 @@ use spirv_std::num_traits::Float;
 use bytemuck::{Pod, Zeroable};
 use spirv_std::glam::Vec3;
 
+use crate::light::SphereLight;
 use crate::ray::Ray;
 
 /// Slack of the inside test in parametric units (fractions of an edge).
@@ -36,8 +37,12 @@ pub struct Wall {
     /// Unit normal, `edge_u x edge_v` normalised. Walls are two-sided: the
     /// integrator flips it toward the incoming ray.
     pub normal: Vec3,
-    /// Padding.
-    pub _pad3: f32,
+    /// +1 or -1 when every other wall and sphere of the scene lies on that
+    /// side of the wall's plane (along `normal`), else 0: the wall is then a
+    /// face of the scene's convex hull, and no shadow ray between two points
+    /// on that side can cross it. [`Wall::new`] sets 0 (nothing known);
+    /// `Geometry::new` sets it from the whole scene.
+    pub enclosure_side: f32,
     /// `edge_v x w` with `w = (edge_u x edge_v) / |edge_u x edge_v|^2`:
     /// `q . coord_u` is the coordinate `a` of a point `q` relative to
     /// `corner`. It equals `w . (q x edge_v)` (Shirley, "Ray Tracing: The
@@ -65,6 +70,15 @@ impl Wall {
         let (normal, w) = if n2 > 0.0 { (n / n2.sqrt(), n / n2) } else { (Vec3::ZERO, Vec3::ZERO) };
         let (coord_u, coord_v) = (edge_v.cross(w), w.cross(edge_u));
         Self { corner, edge_u, edge_v, normal, coord_u, coord_v, albedo, ..Self::default() }
+    }
+
+    /// Whether the wall can block no shadow ray toward `light`: all other
+    /// geometry and the whole light lie on its [`Wall::enclosure_side`].
+    /// Shadow rays start on surfaces and end on the light, and a segment
+    /// between two points of a half-space stays in it.
+    pub fn cannot_shadow(&self, light: &SphereLight) -> bool {
+        // A side of 0 gives 0 >= radius: false, as the light's radius is > 0.
+        self.enclosure_side * self.normal.dot(light.center - self.corner) >= light.radius
     }
 
     /// Area of the parallelogram.

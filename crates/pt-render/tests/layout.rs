@@ -69,7 +69,7 @@ fn wall_layout() -> (u32, Vec<u32>) {
         edge_v,
         _pad2,
         normal,
-        _pad3,
+        enclosure_side,
         coord_u,
         _pad4,
         coord_v,
