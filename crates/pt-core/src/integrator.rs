@@ -164,10 +164,12 @@ struct Scatter {
 
 impl Scatter {
     /// Sampling about unit normal `n`, with the glow lobe around `cone` when
-    /// `glow` is set and the cone is not empty.
+    /// `glow` is set, the cone is not empty and the lobe is not wholly below
+    /// the surface (the unlit side of a sphere keeps all of its samples).
     fn new(n: Vec3, cone: &LightCone, glow: bool) -> Self {
-        let glow_probability = if glow && !cone.is_empty() { GLOW_PROBABILITY } else { 0.0 };
-        Self { n, glow: GlowLobe::new(cone), glow_probability }
+        let lobe = GlowLobe::new(cone);
+        let glow_probability = if glow && !cone.is_empty() && !lobe.below_horizon(n) { GLOW_PROBABILITY } else { 0.0 };
+        Self { n, glow: lobe, glow_probability }
     }
 
     /// A direction from `u` in [0, 1)^2: `u.x` picks the lobe and is

@@ -147,6 +147,15 @@ impl GlowLobe {
         t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin()) + self.axis * (1.0 - x)
     }
 
+    /// Whether every direction of the lobe lies below the surface of unit
+    /// normal `n` (the light is far below its horizon): sampling it would
+    /// only end paths.
+    pub fn below_horizon(&self, n: Vec3) -> bool {
+        // The lobe is the cap of half angle t about the axis, 1 - cos t =
+        // reach; all below when the axis is more than t below the horizon.
+        self.reach < 1.0 && n.dot(self.axis) < -(self.reach * (2.0 - self.reach)).sqrt()
+    }
+
     /// Solid-angle density of [`GlowLobe::sample`] at unit `dir`.
     pub fn pdf(&self, dir: Vec3) -> f32 {
         // 1 - cos as half the squared chord: no cancellation near the axis.
@@ -261,6 +270,22 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!(d < 1.95 / (n as f64).sqrt(), "sin(alpha) {sin_alpha}: KS distance {d}");
         }
+    }
+
+    #[test]
+    fn glow_is_below_the_horizon_only_when_all_of_it_is() {
+        let (lobe, axis) = glow(0.09);
+        let (t, _) = crate::sampling::orthonormal_basis(axis);
+        // The lobe's edge is t_r = acos(1 - reach) from the axis: a normal
+        // tilted 90 + t_r degrees away just puts the whole lobe below.
+        let edge = (1.0 - lobe.reach).acos();
+        let normal = |tilt: f32| t * tilt.sin() + axis * tilt.cos();
+        assert!(!lobe.below_horizon(axis) && !lobe.below_horizon(t));
+        assert!(!lobe.below_horizon(normal(PI / 2.0 + edge - 1e-3)));
+        assert!(lobe.below_horizon(normal(PI / 2.0 + edge + 1e-3)) && lobe.below_horizon(-axis));
+        // A point next to a large light: the lobe reaches past 90 degrees.
+        let (near, axis) = glow(0.999);
+        assert!(near.reach > 1.0 && !near.below_horizon(-axis));
     }
 
     #[test]
