@@ -465,8 +465,27 @@ pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
     })
 }
 
+/// Each seed's time to relMSE `target` along its own curve (seeds that do
+/// not reach it are left out): the spread of a strategy's time.
+pub fn seed_times_to(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<f64> {
+    let mut seeds: Vec<u32> =
+        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.seed).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    seeds
+        .iter()
+        .filter_map(|&seed| {
+            let mut curve: Vec<&Point> =
+                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.seed == seed).collect();
+            curve.sort_by_key(|p| p.spp);
+            time_to(&curve.iter().map(|p| (p.time, p.rel_mse)).collect::<Vec<_>>(), target)
+        })
+        .collect()
+}
+
 /// The convergence table in markdown, per backend, with the fastest
-/// strategy to relMSE `target` named.
+/// strategy to relMSE `target` named, and those it does not beat by more
+/// than the spread of its seeds (ties: their seeds' time ranges overlap).
 pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels: u64) -> String {
     let mut s = String::new();
     let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
@@ -480,9 +499,15 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
         let _ = writeln!(
             s,
             "| strategy | samples/s | relMSE at {t_eq:.3} s | relMSE at {max_spp} spp (seed range) | relMSE x time at {max_spp} spp \
-             | time to relMSE {target:.0e} | speed-up vs default |\n|---|---|---|---|---|---|---|"
+             | time to relMSE {target:.0e} (seed range) | speed-up vs default |\n|---|---|---|---|---|---|---|"
         );
         let mut best: Option<(&str, f64)> = None;
+        let range = |name: &str| {
+            let times = seed_times_to(points, b, name, target);
+            let lo = times.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (!times.is_empty()).then_some((lo, hi))
+        };
         for (st, c) in &curves {
             let Some(last) = c.last() else { continue };
             let te = time_error(c);
@@ -504,7 +529,11 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
                 last.rel_mse_min,
                 last.rel_mse_max,
                 last.rel_mse * last.time,
-                tt.map_or(format!("> {:.2} s", last.time), |t| format!("{t:.3} s")),
+                match (tt, range(st.name)) {
+                    (Some(t), Some((lo, hi))) => format!("{t:.3} s ({lo:.2}-{hi:.2})"),
+                    (Some(t), None) => format!("{t:.3} s"),
+                    (None, _) => format!("> {:.2} s", last.time),
+                },
                 match (tt, base_time) {
                     (Some(t), Some(b)) => format!("{:.2}x", b / t),
                     _ => "-".into(),
@@ -513,6 +542,21 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
         }
         if let Some((name, t)) = best {
             let _ = writeln!(s, "\nFastest to relMSE {target:.0e} on this backend: **{name}** ({t:.3} s).");
+            if let Some((best_lo, best_hi)) = range(name) {
+                let tied: Vec<&str> = STRATEGIES
+                    .iter()
+                    .map(|st| st.name)
+                    .filter(|&other| other != name)
+                    .filter(|&other| range(other).is_some_and(|(lo, hi)| lo <= best_hi && best_lo <= hi))
+                    .collect();
+                if !tied.is_empty() {
+                    let _ = writeln!(
+                        s,
+                        "Tied with it (their seeds' times to relMSE {target:.0e} overlap its own): {}.",
+                        tied.join("; ")
+                    );
+                }
+            }
         }
     }
     s
@@ -613,4 +657,32 @@ pub fn load_reference(path: &Path, settings: &RenderSettings) -> Result<Vec<[f32
         );
     }
     Ok(px)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(strategy: &str, seed: u32, spp: u32, time: f64, rel_mse: f64) -> Point {
+        Point { backend: "b".into(), strategy: strategy.into(), seed, spp, time, rel_mse, mape: 0.0, rmse: 0.0 }
+    }
+
+    #[test]
+    fn seed_times_interpolate_each_seed_log_log() {
+        // Seed 1 halves its error... from 2e-3 at 1 s to 5e-4 at 2 s: 1e-3
+        // is halfway in log error, so at sqrt(2) s. Seed 2 reaches it at
+        // exactly 3 s; seed 3 never does and is left out.
+        let pts = [
+            point("s", 1, 8, 1.0, 2e-3),
+            point("s", 1, 16, 2.0, 5e-4),
+            point("s", 2, 16, 6.0, 1e-4),
+            point("s", 2, 8, 3.0, 1e-3),
+            point("s", 3, 8, 1.0, 5e-3),
+            point("s", 3, 16, 2.0, 2e-3),
+            point("other", 1, 8, 0.1, 1e-5),
+        ];
+        let t = seed_times_to(&pts, "b", "s", 1e-3);
+        assert_eq!(t.len(), 2);
+        assert!((t[0] - 2f64.sqrt()).abs() < 1e-12 && (t[1] - 3.0).abs() < 1e-12, "{t:?}");
+    }
 }

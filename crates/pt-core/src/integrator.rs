@@ -10,7 +10,7 @@ use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
-use crate::sampling::{PI, cosine_hemisphere, power_heuristic};
+use crate::sampling::{PI, about_axis, cosine_polar, power_heuristic};
 use crate::sphere::{intersect_sphere, sphere_hit_point};
 use crate::wall::intersect_wall;
 
@@ -174,9 +174,20 @@ impl Scatter {
 
     /// A direction from `u` in [0, 1)^2: `u.x` picks the lobe and is
     /// stretched back to [0, 1) for it, which keeps its stratification.
+    ///
+    /// Both lobes are symmetric about an axis, so only the axis and the
+    /// polar angle depend on the pick; the basis and the turn about the axis
+    /// are shared. SIMD lanes that pick different lobes then run one basis
+    /// and one sine and cosine, not both lobes' (a GPU runs both sides of a
+    /// divergent branch).
     fn sample(&self, u: Vec2) -> Vec3 {
         let p = self.glow_probability;
-        if u.x < p { self.glow.sample(u.x / p, u.y) } else { cosine_hemisphere(self.n, (u.x - p) / (1.0 - p), u.y) }
+        let (axis, (cos_theta, sin_theta)) = if u.x < p {
+            (self.glow.axis(), self.glow.polar(u.x / p))
+        } else {
+            (self.n, cosine_polar((u.x - p) / (1.0 - p)))
+        };
+        about_axis(axis, cos_theta, sin_theta, u.y)
     }
 
     /// Solid-angle density of [`Scatter::sample`] at unit `dir`.

@@ -18,17 +18,26 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
     (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
 }
 
-/// A direction about unit `n` with density cos(theta)/pi (Malley's method:
-/// a uniform disk point lifted onto the hemisphere). `u1`, `u2` in [0, 1).
+/// The unit vector at the angle with cosine `cos_theta` and sine
+/// `sin_theta` from unit `axis`, turned by `2 pi u` about it.
+pub fn about_axis(axis: Vec3, cos_theta: f32, sin_theta: f32, u: f32) -> Vec3 {
+    let phi = 2.0 * PI * u;
+    let (t, b) = orthonormal_basis(axis);
+    t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin()) + axis * cos_theta
+}
+
+/// `(cos, sin)` of the polar angle of [`cosine_hemisphere`]'s direction
+/// for `u1`: Malley's method lifts a uniform disk point of radius
+/// `sqrt(u1)` onto the hemisphere; `1 - u1` is exact and never negative.
+pub fn cosine_polar(u1: f32) -> (f32, f32) {
+    ((1.0 - u1).sqrt(), u1.sqrt())
+}
+
+/// A direction about unit `n` with density cos(theta)/pi (Malley's method).
+/// `u1`, `u2` in [0, 1).
 pub fn cosine_hemisphere(n: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let r = u1.sqrt();
-    let phi = 2.0 * PI * u2;
-    let x = r * phi.cos();
-    let y = r * phi.sin();
-    // 1 - u1 instead of 1 - x^2 - y^2: exact, never negative.
-    let z = (1.0 - u1).sqrt();
-    let (t, b) = orthonormal_basis(n);
-    t * x + b * y + n * z
+    let (cos_theta, sin_theta) = cosine_polar(u1);
+    about_axis(n, cos_theta, sin_theta, u2)
 }
 
 /// Density of [`cosine_hemisphere`] for a direction with cosine `cos_theta`

@@ -816,7 +816,7 @@ fn watertight(size: Size, out: &mut Vec<CaseResult>) {
 fn sampling(out: &mut Vec<CaseResult>) {
     let bins = SphereBins { nt: 20, np: 40 };
     let n = 400_000usize;
-    let tests = 5.0;
+    let tests = 7.0;
     // Sidak: each test at 1 - (1 - alpha)^(1/tests).
     let alpha_each = 1.0 - (1.0 - SAMPLING_ALPHA).powf(1.0 / tests);
     let mut chi2_case = |name: String, sample: &dyn Fn(&mut Rng) -> Vec3, pdf: &dyn Fn([f64; 3]) -> f64| {
@@ -835,6 +835,48 @@ fn sampling(out: &mut Vec<CaseResult>) {
     chi2_case("cosine hemisphere".into(), &|rng| cosine_hemisphere(normal, rng.next_f32(), rng.next_f32()), &|d| {
         DVec3::from_array(d).dot(nd).max(0.0) / PI
     });
+    // The glow lobe, binned in its own frame: bands of equal width in
+    // x = 1 - cos about the axis over [0, reach] and sectors of phi. Each
+    // band expects n times the integral of the lobe's pdf over it (2 pi dx,
+    // by a fine midpoint sum through `pdf` itself), shared by its sectors.
+    // Lights of sin(a) = 0.5 and 0.2, whose lobes peak 3 and 8 times above
+    // their rims.
+    for sin_sigma in [0.5f32, 0.2] {
+        let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
+        let lobe = light::GlowLobe::new(&light::light_cone(&l, Vec3::ZERO));
+        let (tb, bb) = pt_core::sampling::orthonormal_basis(lobe.axis());
+        let (axis, tb, bb) = (lobe.axis().as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
+        let reach = lobe.reach() as f64;
+        let (nt, np, sub) = (20usize, 20usize, 1000usize);
+        let band_mass = |band: usize| {
+            (0..sub)
+                .map(|i| {
+                    let x = reach * (band as f64 + (i as f64 + 0.5) / sub as f64) / nt as f64;
+                    let dir = tb * (x * (2.0 - x)).sqrt() + axis * (1.0 - x);
+                    2.0 * PI * lobe.pdf(dir.as_vec3()) as f64 * reach / (nt * sub) as f64
+                })
+                .sum::<f64>()
+        };
+        let expected: Vec<f64> =
+            (0..nt).flat_map(|t| std::iter::repeat_n(n as f64 * band_mass(t) / np as f64, np)).collect();
+        let mut rng = Rng::new(5, 6, 7, 8, 9);
+        let mut observed = vec![0.0; nt * np + 1];
+        for _ in 0..n {
+            let d = lobe.sample(rng.next_f32(), rng.next_f32()).as_dvec3().normalize();
+            let band = (1.0 - d.dot(axis)) / reach;
+            let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
+            let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
+                nt * np
+            } else {
+                ((band * nt as f64) as usize).min(nt - 1) * np + ((phi / (2.0 * PI) * np as f64) as usize).min(np - 1)
+            };
+            observed[cell] += 1.0;
+        }
+        let outside = observed[nt * np];
+        let r = chi2_test(&observed[..nt * np], &expected);
+        let name = format!("glow lobe, sin(a)={sin_sigma}");
+        out.push(CaseResult::chi2(&name, &format!(", {outside} outside"), &r, alpha_each, outside == 0.0));
+    }
     // The light cone is binned in its own frame: bands of equal width in
     // cos(theta) about the axis over [cos_max, 1] and sectors of phi are
     // equal solid angles of the cap, so each expects n / cells exactly; a
