@@ -3,7 +3,7 @@
 mod bench;
 mod viewer;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{Context, Result};
@@ -492,7 +492,8 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
         let table = bench::throughput_markdown(&rows);
         println!("{table}");
         report.push_str(&format!(
-            "## Throughput\n\nDefault scene; one warm-up frame, then {} timed frames per configuration; median and \
+            "## Throughput\n\nDefault scene; warm-up frames for half a second (at least one), then {} timed frames per \
+             configuration; median and \
              range of frames per second. Rays per sample (closest-hit plus shadow rays) are counted by the CPU's \
              instrumented trace of the same code over every 4th pixel in x and y, and multiply the samples per \
              second of both backends. The original OpenGL design reached 120 frames/s at 1920x1080, 4 spp/frame, \
@@ -570,6 +571,7 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
             report.push_str(&mitsuba_section(m, &points)?);
         }
         report.push_str(&defaults_section(&points));
+        report.push_str(&gpu_machine_section(args.report.as_deref()));
     }
 
     if let Some(path) = &args.report {
@@ -653,12 +655,9 @@ fn defaults_section(points: &[bench::Point]) -> String {
          inverse square of the distance from the light, as the irradiance of surfaces around it does.\n\
          - Workgroup shape: 8x8 stays the default. The throughput table times 16x4, 32x2 and 4x4 on the \
          512x512 configuration; on lavapipe the shape only changes how invocations are batched into its \
-         8-wide SIMD (4 wide rows leave half of each vector empty), and a real GPU's answer may differ: \
-         measure there before changing it.\n\n\
-         ## NVIDIA H100 / H200\n\n\
-         Not measured: no GPU machine was lent to the session that wrote this report. To measure, run \
-         `pathtracer bench throughput --backend gpu` on such a machine (the kernel is embedded in the release \
-         binary; see DESIGN section 9) and add its figures here with the GPU and driver named.\n",
+         8-wide SIMD (4 wide rows leave half of each vector empty). On an H100 (PERFORMANCE-H100.md) 8x8, \
+         16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \
+         workgroup fills half of a 32-wide warp.\n",
         vs_default(1),
         vs_default(2),
         vs_default(4),
@@ -669,6 +668,30 @@ fn defaults_section(points: &[bench::Point]) -> String {
         vs_default(6),
         vs_default(7),
     )
+}
+
+/// The report made on a lent GPU machine, kept beside the main one.
+const GPU_MACHINE_REPORT: &str = "PERFORMANCE-H100.md";
+
+/// Where the figures of a data-centre GPU are: the report of that name
+/// beside `report` when there is one (this machine has no such GPU).
+fn gpu_machine_section(report: Option<&Path>) -> String {
+    let command = format!(
+        "`pathtracer bench throughput --backend gpu --reps 10 --report docs/{GPU_MACHINE_REPORT}` (the kernel \
+         is embedded in the release binary; DESIGN section 9)"
+    );
+    let beside = report.and_then(Path::parent).map(|d| d.join(GPU_MACHINE_REPORT));
+    if beside.is_some_and(|p| p.exists()) {
+        format!(
+            "\n## NVIDIA H100 / H200\n\nMeasured on a lent machine: [{GPU_MACHINE_REPORT}]({GPU_MACHINE_REPORT}), \
+             made there by {command}. It names the GPU and its driver. Rerun it there after a change to the kernel.\n"
+        )
+    } else {
+        format!(
+            "\n## NVIDIA H100 / H200\n\nNot measured: no such GPU was at hand. To measure, run {command} on a \
+             machine that has one, and keep the report beside this one.\n"
+        )
+    }
 }
 
 /// A progress bar over `spp` samples per pixel, with elapsed time and ETA.
