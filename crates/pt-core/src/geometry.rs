@@ -58,11 +58,12 @@ impl Geometry {
 /// other wall and sphere lies, or 0 when there are some on both sides
 /// ([`Wall::enclosure_side`]).
 ///
-/// Points may stray to the wrong side by a tolerance of 1e-5 of the
-/// scene's largest coordinate: walls that meet at a seam are coplanar
-/// there up to rounding. Straying so little, a surface point could only
-/// see the light through the wall within 1e-5 of the seam; the walls'
-/// edge slack (`EDGE_SLACK`) is left out for the same reason.
+/// Points may stray to the wrong side by 1e-6 of the scene's largest
+/// coordinate (8 float steps): walls that meet at a seam are coplanar there
+/// up to rounding. A point straying so little could see the light through
+/// the wall only that close to it; the walls' edge slack (`EDGE_SLACK`) is
+/// left out for the same reason. Geometry further out keeps the wall
+/// tested: a tighter tolerance can only cost speed.
 #[cfg(not(target_arch = "spirv"))]
 fn enclosure_side(walls: &[Wall], spheres: &[Sphere], i: usize) -> f32 {
     let wall = &walls[i];
@@ -74,7 +75,7 @@ fn enclosure_side(walls: &[Wall], spheres: &[Sphere], i: usize) -> f32 {
         .map(|p| p.abs().max_element())
         .chain(spheres.iter().map(|s| s.center.abs().max_element() + s.radius))
         .fold(0.0f32, f32::max);
-    let tolerance = 1e-5 * scale;
+    let tolerance = 1e-6 * scale;
     // The signed distances' range over all other points.
     let distance = |p: Vec3| wall.normal.dot(p - wall.corner);
     let (mut lo, mut hi) = (0.0f32, 0.0f32);

@@ -813,6 +813,38 @@ fn watertight(size: Size, out: &mut Vec<CaseResult>) {
     ));
 }
 
+/// Counts of `n` directions from `sample` in the frame of `axis`: `bands`
+/// bands of equal width in `1 - cos` of the angle to the axis over [0,
+/// `max_x`], each cut in `sectors` equal sectors of the turn about it, then
+/// one cell for directions outside. Directions are normalised in f64 (the
+/// test is about where they point; an f32 unit vector is unit only to
+/// ~1e-7), and a hair of slack at both ends of the range absorbs rounding.
+fn cap_histogram(
+    n: usize,
+    axis: Vec3,
+    max_x: f64,
+    (bands, sectors): (usize, usize),
+    sample: impl Fn(&mut Rng) -> Vec3,
+) -> Vec<f64> {
+    let (tb, bb) = pt_core::sampling::orthonormal_basis(axis);
+    let (axis, tb, bb) = (axis.as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
+    let mut rng = Rng::new(5, 6, 7, 8, 9);
+    let mut observed = vec![0.0; bands * sectors + 1];
+    for _ in 0..n {
+        let d = sample(&mut rng).as_dvec3().normalize();
+        let band = (1.0 - d.dot(axis)) / max_x;
+        let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
+        let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
+            bands * sectors
+        } else {
+            ((band * bands as f64) as usize).min(bands - 1) * sectors
+                + ((phi / (2.0 * PI) * sectors as f64) as usize).min(sectors - 1)
+        };
+        observed[cell] += 1.0;
+    }
+    observed
+}
+
 fn sampling(out: &mut Vec<CaseResult>) {
     let bins = SphereBins { nt: 20, np: 40 };
     let n = 400_000usize;
@@ -835,75 +867,46 @@ fn sampling(out: &mut Vec<CaseResult>) {
     chi2_case("cosine hemisphere".into(), &|rng| cosine_hemisphere(normal, rng.next_f32(), rng.next_f32()), &|d| {
         DVec3::from_array(d).dot(nd).max(0.0) / PI
     });
-    // The glow lobe, binned in its own frame: bands of equal width in
-    // x = 1 - cos about the axis over [0, reach] and sectors of phi. Each
-    // band expects n times the integral of the lobe's pdf over it (2 pi dx,
-    // by a fine midpoint sum through `pdf` itself), shared by its sectors.
-    // Lights of sin(a) = 0.5 and 0.2, whose lobes peak 3 and 8 times above
-    // their rims.
+    // The glow lobe, binned in its own frame (`cap_histogram`) over x = 1 -
+    // cos in [0, reach]. Each band expects n times the integral of the
+    // lobe's pdf over it (2 pi dx, by a fine midpoint sum through `pdf`
+    // itself), shared by its sectors. Lights of sin(a) = 0.5 and 0.2, whose
+    // lobes peak 3 and 8 times above their rims.
     for sin_sigma in [0.5f32, 0.2] {
         let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
         let lobe = light::GlowLobe::new(&light::light_cone(&l, Vec3::ZERO));
-        let (tb, bb) = pt_core::sampling::orthonormal_basis(lobe.axis());
-        let (axis, tb, bb) = (lobe.axis().as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
-        let reach = lobe.reach() as f64;
         let (nt, np, sub) = (20usize, 20usize, 1000usize);
+        let (reach, axis) = (lobe.reach() as f64, lobe.axis().as_dvec3());
+        let side = pt_core::sampling::orthonormal_basis(lobe.axis()).0.as_dvec3();
         let band_mass = |band: usize| {
             (0..sub)
                 .map(|i| {
                     let x = reach * (band as f64 + (i as f64 + 0.5) / sub as f64) / nt as f64;
-                    let dir = tb * (x * (2.0 - x)).sqrt() + axis * (1.0 - x);
+                    let dir = side * (x * (2.0 - x)).sqrt() + axis * (1.0 - x);
                     2.0 * PI * lobe.pdf(dir.as_vec3()) as f64 * reach / (nt * sub) as f64
                 })
                 .sum::<f64>()
         };
         let expected: Vec<f64> =
             (0..nt).flat_map(|t| std::iter::repeat_n(n as f64 * band_mass(t) / np as f64, np)).collect();
-        let mut rng = Rng::new(5, 6, 7, 8, 9);
-        let mut observed = vec![0.0; nt * np + 1];
-        for _ in 0..n {
-            let d = lobe.sample(rng.next_f32(), rng.next_f32()).as_dvec3().normalize();
-            let band = (1.0 - d.dot(axis)) / reach;
-            let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
-            let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
-                nt * np
-            } else {
-                ((band * nt as f64) as usize).min(nt - 1) * np + ((phi / (2.0 * PI) * np as f64) as usize).min(np - 1)
-            };
-            observed[cell] += 1.0;
-        }
+        let observed =
+            cap_histogram(n, lobe.axis(), reach, (nt, np), |rng| lobe.sample(rng.next_f32(), rng.next_f32()));
         let outside = observed[nt * np];
         let r = chi2_test(&observed[..nt * np], &expected);
         let name = format!("glow lobe, sin(a)={sin_sigma}");
         out.push(CaseResult::chi2(&name, &format!(", {outside} outside"), &r, alpha_each, outside == 0.0));
     }
-    // The light cone is binned in its own frame: bands of equal width in
-    // cos(theta) about the axis over [cos_max, 1] and sectors of phi are
-    // equal solid angles of the cap, so each expects n / cells exactly; a
-    // sample outside the cap lands in an extra cell that expects none.
+    // The light cone, binned in its own frame over [0, 1 - cos_max]: bands
+    // of equal width in cos(theta) and sectors of phi are equal solid angles
+    // of the cap, so each expects n / cells exactly; a sample outside the
+    // cap lands in the extra cell, which expects none.
     for sin_sigma in [0.05f32, 0.5, 0.95] {
         let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
         let cone = light::light_cone(&l, Vec3::ZERO);
-        let (tb, bb) = pt_core::sampling::orthonormal_basis(cone.axis);
-        let (axis, tb, bb) = (cone.axis.as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
-        let omc = cone.one_minus_cos_max as f64;
         let (nt, np) = (20usize, 40usize);
-        let mut rng = Rng::new(5, 6, 7, 8, 9);
-        let mut observed = vec![0.0; nt * np + 1];
-        for _ in 0..n {
-            // Normalised in f64: the test is about where directions point,
-            // and an f32 unit vector is unit only to ~1e-7.
-            let d = cone.sample(rng.next_f32(), rng.next_f32()).0.as_dvec3().normalize();
-            let band = (1.0 - d.dot(axis)) / omc;
-            let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
-            // A hair of slack at the rim and the axis for f32 rounding.
-            let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
-                nt * np
-            } else {
-                ((band * nt as f64) as usize).min(nt - 1) * np + ((phi / (2.0 * PI) * np as f64) as usize).min(np - 1)
-            };
-            observed[cell] += 1.0;
-        }
+        let observed = cap_histogram(n, cone.axis, cone.one_minus_cos_max as f64, (nt, np), |rng| {
+            cone.sample(rng.next_f32(), rng.next_f32()).0
+        });
         let outside = observed[nt * np];
         let r = chi2_test(&observed[..nt * np], &vec![n as f64 / (nt * np) as f64; nt * np]);
         let name = format!("sphere light cone, sin(a)={sin_sigma}");
