@@ -511,9 +511,16 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
     let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
     backends.dedup();
     for b in &backends {
-        let curves: Vec<_> = STRATEGIES.iter().map(|st| (st, mean_curve(points, b, st.name))).collect();
+        // Each strategy's curve, and the range of its seeds' times to `target`.
+        let range = |name: &str| {
+            let times = seed_times_to(points, b, name, target);
+            let lo = times.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (!times.is_empty()).then_some((lo, hi))
+        };
+        let curves: Vec<_> = STRATEGIES.iter().map(|st| (st, mean_curve(points, b, st.name), range(st.name))).collect();
         // Equal time: the shortest total time of any strategy.
-        let t_eq = curves.iter().map(|(_, c)| c.last().map_or(f64::MAX, |l| l.time)).fold(f64::MAX, f64::min);
+        let t_eq = curves.iter().map(|(_, c, _)| c.last().map_or(f64::MAX, |l| l.time)).fold(f64::MAX, f64::min);
         let base_time = time_to(&time_error(&curves[0].1), target);
         let _ = writeln!(s, "\n### {b}\n");
         let _ = writeln!(
@@ -521,14 +528,9 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
             "| strategy | samples/s | relMSE at {t_eq:.3} s | relMSE at {max_spp} spp (seed range) | relMSE x time at {max_spp} spp \
              | time to relMSE {target:.0e} (seed range) | speed-up vs default |\n|---|---|---|---|---|---|---|"
         );
-        let mut best: Option<(&str, f64)> = None;
-        let range = |name: &str| {
-            let times = seed_times_to(points, b, name, target);
-            let lo = times.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = times.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            (!times.is_empty()).then_some((lo, hi))
-        };
-        for (st, c) in &curves {
+        // Index in `curves` and time of the fastest strategy.
+        let mut best: Option<(usize, f64)> = None;
+        for (i, (st, c, seed_range)) in curves.iter().enumerate() {
             let Some(last) = c.last() else { continue };
             let te = time_error(c);
             let sps = pixels as f64 * max_spp as f64 / last.time;
@@ -537,7 +539,7 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
             if let Some(t) = tt
                 && best.is_none_or(|(_, bt)| t < bt)
             {
-                best = Some((st.name, t));
+                best = Some((i, t));
             }
             let _ = writeln!(
                 s,
@@ -549,7 +551,7 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
                 last.rel_mse_min,
                 last.rel_mse_max,
                 last.rel_mse * last.time,
-                match (tt, range(st.name)) {
+                match (tt, seed_range) {
                     (Some(t), Some((lo, hi))) => format!("{t:.3} s ({lo:.2}-{hi:.2})"),
                     (Some(t), None) => format!("{t:.3} s"),
                     (None, _) => format!("> {:.2} s", last.time),
@@ -560,14 +562,14 @@ pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels:
                 }
             );
         }
-        if let Some((name, t)) = best {
+        if let Some((i, t)) = best {
+            let (name, best_range) = (curves[i].0.name, curves[i].2);
             let _ = writeln!(s, "\nFastest to relMSE {target:.0e} on this backend: **{name}** ({t:.3} s).");
-            if let Some((best_lo, best_hi)) = range(name) {
-                let tied: Vec<&str> = STRATEGIES
+            if let Some((best_lo, best_hi)) = best_range {
+                let tied: Vec<&str> = curves
                     .iter()
-                    .map(|st| st.name)
-                    .filter(|&other| other != name)
-                    .filter(|&other| range(other).is_some_and(|(lo, hi)| lo <= best_hi && best_lo <= hi))
+                    .filter(|(st, _, r)| st.name != name && r.is_some_and(|(lo, hi)| lo <= best_hi && best_lo <= hi))
+                    .map(|(st, _, _)| st.name)
                     .collect();
                 if !tied.is_empty() {
                     let _ = writeln!(
@@ -704,5 +706,25 @@ mod tests {
         let t = seed_times_to(&pts, "b", "s", 1e-3);
         assert_eq!(t.len(), 2);
         assert!((t[0] - 2f64.sqrt()).abs() < 1e-12 && (t[1] - 3.0).abs() < 1e-12, "{t:?}");
+    }
+
+    #[test]
+    fn the_table_names_the_fastest_and_the_strategies_tied_with_it() {
+        // Each seed halves its log error between (t, 2e-3) and (4 t, 5e-4):
+        // it reaches 1e-3 at 2 t. Seeds of NEE only reach it at 1.9-2.0 s,
+        // the default's at 1.95-2.1 s (overlapping: a tie), independent
+        // samples' at 3-3.2 s (not a tie).
+        let mut pts = Vec::new();
+        for (k, reach) in [(0, [2.1, 1.95]), (5, [1.9, 2.0]), (1, [3.0, 3.2])] {
+            for (seed, r) in reach.into_iter().enumerate() {
+                pts.push(point(STRATEGIES[k].name, seed as u32, 4, r / 2.0, 2e-3));
+                pts.push(point(STRATEGIES[k].name, seed as u32, 8, r * 2.0, 5e-4));
+            }
+        }
+        let table = convergence_markdown(&pts, 1e-3, 8, 1);
+        assert!(table.contains(&format!("**{}**", STRATEGIES[5].name)), "{table}");
+        let tied = table.lines().find(|l| l.starts_with("Tied with it")).expect("a tie line");
+        assert!(tied.contains(STRATEGIES[0].name) && !tied.contains(STRATEGIES[1].name), "{tied}");
+        assert!(table.contains("(1.95-2.10)") && table.contains("(3.00-3.20)"), "{table}");
     }
 }

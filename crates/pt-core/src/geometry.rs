@@ -47,35 +47,40 @@ impl Geometry {
         let mut g = Self::zeroed();
         g.walls[..walls.len()].copy_from_slice(walls);
         g.spheres[..spheres.len()].copy_from_slice(spheres);
+        // The tolerance of `enclosure_side`: 1e-6 of the largest coordinate.
+        let scale = walls
+            .iter()
+            .flat_map(corners)
+            .map(|p| p.abs().max_element())
+            .chain(spheres.iter().map(|s| s.center.abs().max_element() + s.radius))
+            .fold(0.0f32, f32::max);
         for (i, w) in g.walls[..walls.len()].iter_mut().enumerate() {
-            w.enclosure_side = enclosure_side(walls, spheres, i);
+            w.enclosure_side = enclosure_side(walls, spheres, i, 1e-6 * scale);
         }
         Some(g)
     }
+}
+
+/// The four corners of a wall.
+#[cfg(not(target_arch = "spirv"))]
+fn corners(w: &Wall) -> [Vec3; 4] {
+    [w.corner, w.corner + w.edge_u, w.corner + w.edge_v, w.corner + w.edge_u + w.edge_v]
 }
 
 /// The side (+1 or -1 along its normal) of wall `i`'s plane on which every
 /// other wall and sphere lies, or 0 when there are some on both sides
 /// ([`Wall::enclosure_side`]).
 ///
-/// Points may stray to the wrong side by 1e-6 of the scene's largest
-/// coordinate (8 float steps): walls that meet at a seam are coplanar there
-/// up to rounding. A point straying so little could see the light through
+/// Points may stray to the wrong side by `tolerance`, 1e-6 of the scene's
+/// largest coordinate (8 float steps): walls that meet at a seam are
+/// coplanar there up to rounding. A point straying so little could see the light through
 /// the wall only that close to it; the walls' edge slack (`EDGE_SLACK`) is
 /// left out for the same reason. Geometry further out keeps the wall
 /// tested: a tighter tolerance can only cost speed.
 #[cfg(not(target_arch = "spirv"))]
-fn enclosure_side(walls: &[Wall], spheres: &[Sphere], i: usize) -> f32 {
+fn enclosure_side(walls: &[Wall], spheres: &[Sphere], i: usize, tolerance: f32) -> f32 {
     let wall = &walls[i];
-    let corners = |w: &Wall| [w.corner, w.corner + w.edge_u, w.corner + w.edge_v, w.corner + w.edge_u + w.edge_v];
     let others = walls.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, w)| w);
-    let scale = walls
-        .iter()
-        .flat_map(corners)
-        .map(|p| p.abs().max_element())
-        .chain(spheres.iter().map(|s| s.center.abs().max_element() + s.radius))
-        .fold(0.0f32, f32::max);
-    let tolerance = 1e-6 * scale;
     // The signed distances' range over all other points.
     let distance = |p: Vec3| wall.normal.dot(p - wall.corner);
     let (mut lo, mut hi) = (0.0f32, 0.0f32);
