@@ -166,9 +166,11 @@ impl Scatter {
     /// Sampling about unit normal `n`, with the glow lobe around `cone` when
     /// `glow` is set, the cone is not empty and the lobe is not wholly below
     /// the surface (the unlit side of a sphere keeps all of its samples).
+    /// Without it the lobe is not built (a logarithm per vertex).
     fn new(n: Vec3, cone: &LightCone, glow: bool) -> Self {
-        let lobe = GlowLobe::new(cone);
-        let glow_probability = if glow && !cone.is_empty() && !lobe.below_horizon(n) { GLOW_PROBABILITY } else { 0.0 };
+        let glow = glow && !cone.is_empty();
+        let lobe = if glow { GlowLobe::new(cone) } else { GlowLobe::UNUSED };
+        let glow_probability = if glow && !lobe.below_horizon(n) { GLOW_PROBABILITY } else { 0.0 };
         Self { n, glow: lobe, glow_probability }
     }
 
@@ -311,7 +313,9 @@ impl<S: Sampler> Path<S> {
         // unbiased; Veach 1997, section 9.2): that ray could then only add
         // background, and with a black one it is not traced.
         let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
-        let scatter = Scatter::new(n, &cone, params.flags & FLAG_GLOW != 0);
+        // After the last vertex no light found by the BSDF counts (MIS weight
+        // 0), so the glow lobe could only find background there.
+        let scatter = Scatter::new(n, &cone, params.flags & FLAG_GLOW != 0 && !last);
         if nee && !cone.is_empty() {
             let u = self.sampler.next_2d();
             let (dir, dist) = cone.sample(u.x, u.y);

@@ -132,6 +132,10 @@ pub struct GlowLobe {
 }
 
 impl GlowLobe {
+    /// A placeholder for vertices that sample no glow lobe: never sampled,
+    /// and its density is never evaluated (its mixture probability is 0).
+    pub const UNUSED: Self = Self { axis: Vec3::Z, scale: 1.0, reach: 1.0, log_ratio: 1.0 };
+
     /// The lobe around `cone`, which must not be empty.
     pub fn new(cone: &LightCone) -> Self {
         let scale = cone.one_minus_cos_max.max(GLOW_MIN_SCALE);
