@@ -162,22 +162,49 @@ mod tests {
         assert!(sides[..2].iter().chain(&sides[3..5]).all(|&s| s != 0.0), "{sides:?}");
     }
 
+    /// Walls in every word of the shadow-wall mask block shadow rays: 96
+    /// unit squares side by side along x, square i in the plane z = -i, each
+    /// hit only by the ray that starts just behind it.
+    #[test]
+    fn shadow_walls_cover_every_wall_index() {
+        use crate::integrator::{ShadowWalls, occluded};
+        use crate::params::FrameParams;
+        use crate::ray::Ray;
+
+        let mut geometry = Geometry::zeroed();
+        for (i, w) in geometry.walls.iter_mut().enumerate() {
+            *w = Wall::new(Vec3::new(3.0 * i as f32, 0.0, -(i as f32)), Vec3::X, Vec3::Y, Vec3::ONE);
+        }
+        let light = crate::light::SphereLight::new(Vec3::new(0.0, 0.0, 200.0), 1.0, Vec3::ONE);
+        for wall_count in [0u32, 5, 32, 33, 64, 70, 96] {
+            let params = FrameParams { light, wall_count, ..Default::default() };
+            // No wall here has everything on one side, so none is culled.
+            let walls = ShadowWalls::new(&params, &geometry);
+            assert_eq!(walls, ShadowWalls::all(&params), "{wall_count} walls");
+            for k in [0u32, 1, 31, 32, 33, 63, 64, 65, 95] {
+                let ray = Ray { origin: Vec3::new(3.0 * k as f32 + 0.5, 0.5, -(k as f32) - 0.5), dir: Vec3::Z };
+                let in_use = k < wall_count;
+                assert_eq!(occluded(&ray, &params, &geometry, &walls, u32::MAX, 1.0), in_use, "wall {k}");
+                assert!(!occluded(&ray, &params, &geometry, &walls, k, 1.0), "wall {k} skipped");
+                assert!(!occluded(&ray, &params, &geometry, &walls, u32::MAX, 0.25), "wall {k} beyond t_max");
+            }
+        }
+    }
+
     /// Shadow rays from random surface points toward random points of the
     /// light: `occluded` with the hull walls skipped answers exactly as with
     /// every wall tested, for a light inside the room and for one behind
     /// the back wall (which must then still cast its shadow).
     #[test]
     fn skipping_hull_walls_changes_no_shadow_ray() {
-        use crate::integrator::occluded;
+        use crate::integrator::{ShadowWalls, occluded};
         use crate::light::{SphereLight, light_cone};
         use crate::params::FrameParams;
         use crate::ray::{Ray, offset_origin};
         use crate::rng::Rng;
 
         let (walls, balls) = (room(), spheres());
-        let culled = Geometry::new(&walls, &balls).unwrap();
-        let mut full = culled;
-        full.walls.iter_mut().for_each(|w| w.enclosure_side = 0.0);
+        let geometry = Geometry::new(&walls, &balls).unwrap();
         let mut rng = Rng::new(1, 2, 3, 4, 5);
         for (center, skipped, min_blocked) in [(Vec3::new(0.0, 1.7, 0.0), 5, 0.0), (Vec3::new(0.0, 1.0, -1.6), 4, 0.5)]
         {
@@ -188,7 +215,8 @@ mod tests {
                 sphere_count: balls.len() as u32,
                 ..Default::default()
             };
-            assert_eq!(culled.walls[..5].iter().filter(|w| w.cannot_shadow(&light)).count(), skipped);
+            assert_eq!(geometry.walls[..5].iter().filter(|w| w.cannot_shadow(&light)).count(), skipped);
+            let (culled, all) = (ShadowWalls::new(&params, &geometry), ShadowWalls::all(&params));
             let (mut rays, mut blocked) = (0, 0);
             for i in 0..20_000u32 {
                 // A point on wall or sphere i % 7, its normal facing the light.
@@ -212,8 +240,8 @@ mod tests {
                     continue;
                 }
                 let ray = Ray { origin, dir };
-                let answer = occluded(&ray, &params, &culled, skip, dist);
-                assert_eq!(answer, occluded(&ray, &params, &full, skip, dist), "ray {i} from {p}");
+                let answer = occluded(&ray, &params, &geometry, &culled, skip, dist);
+                assert_eq!(answer, occluded(&ray, &params, &geometry, &all, skip, dist), "ray {i} from {p}");
                 rays += 1;
                 blocked += answer as u32;
             }

@@ -90,21 +90,91 @@ pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wa
     hit
 }
 
-/// Whether a wall or sphere blocks the shadow ray, which leaves a surface
-/// and ends on the light at `t_max`, in (0, `t_max`). The light is no
-/// occluder of itself. Walls of the scene's convex hull with the light
-/// inside ([`crate::wall::Wall::cannot_shadow`]) are not tested: in a closed room only
-/// the objects in it cast shadows, and a shadow ray costs the spheres alone.
-pub fn occluded(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> bool {
-    let (wall_count, sphere_count) = counts(params);
-    let mut i = 0;
-    while i < wall_count {
-        let wall = &geometry.walls[i as usize];
-        if i != skip_wall && !wall.cannot_shadow(&params.light) && intersect_wall(wall, ray, 0.0, t_max) < t_max {
+/// The walls that can block a shadow ray toward the frame's light: those
+/// that are not [`crate::wall::Wall::cannot_shadow`], as a bit mask over
+/// wall indices, 32 per word. It depends on the light and the geometry
+/// only, so a pixel works it out once per frame, not once per shadow ray;
+/// in a closed room with the light inside, no wall is left.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct ShadowWalls {
+    /// Walls 0 to 31.
+    low: u32,
+    /// Walls 32 to 63.
+    middle: u32,
+    /// Walls 64 to 95.
+    high: u32,
+}
+
+// Three words of 32 bits hold every wall.
+const _: () = assert!(MAX_WALLS <= 96);
+
+impl ShadowWalls {
+    /// The walls in use that can block a shadow ray toward `params.light`.
+    pub fn new(params: &FrameParams, geometry: &Geometry) -> Self {
+        let mut walls = Self { low: 0, middle: 0, high: 0 };
+        let (wall_count, _) = counts(params);
+        let mut i = 0;
+        while i < wall_count {
+            if !geometry.walls[i as usize].cannot_shadow(&params.light) {
+                if i < 32 {
+                    walls.low |= 1 << i;
+                } else if i < 64 {
+                    walls.middle |= 1 << (i - 32);
+                } else {
+                    walls.high |= 1 << (i - 64);
+                }
+            }
+            i += 1;
+        }
+        walls
+    }
+
+    /// Every wall in use, for tests to compare against.
+    #[cfg(test)]
+    pub(crate) fn all(params: &FrameParams) -> Self {
+        let bits = |first: u32| match counts(params).0.saturating_sub(first) {
+            0 => 0,
+            n if n >= 32 => u32::MAX,
+            n => (1 << n) - 1,
+        };
+        Self { low: bits(0), middle: bits(32), high: bits(64) }
+    }
+}
+
+/// Whether one of the walls in `bits` (wall `first` and on) blocks the
+/// shadow ray; the loop ends after the last wall left in the mask.
+fn walls_block(mut bits: u32, first: u32, ray: &Ray, geometry: &Geometry, skip_wall: u32, t_max: f32) -> bool {
+    let mut i = first;
+    while bits != 0 {
+        if bits & 1 != 0 && i != skip_wall && intersect_wall(&geometry.walls[i as usize], ray, 0.0, t_max) < t_max {
             return true;
         }
+        bits >>= 1;
         i += 1;
     }
+    false
+}
+
+/// Whether a wall or sphere blocks the shadow ray, which leaves a surface
+/// and ends on the light at `t_max`, in (0, `t_max`). The light is no
+/// occluder of itself. Only the walls in `walls` are tested: in a closed
+/// room with the light inside, only the objects in it cast shadows, and a
+/// shadow ray costs the spheres alone.
+pub fn occluded(
+    ray: &Ray,
+    params: &FrameParams,
+    geometry: &Geometry,
+    walls: &ShadowWalls,
+    skip_wall: u32,
+    t_max: f32,
+) -> bool {
+    if walls_block(walls.low, 0, ray, geometry, skip_wall, t_max)
+        || walls_block(walls.middle, 32, ray, geometry, skip_wall, t_max)
+        || walls_block(walls.high, 64, ray, geometry, skip_wall, t_max)
+    {
+        return true;
+    }
+    let (_, sphere_count) = counts(params);
     let mut i = 0;
     while i < sphere_count {
         let s = geometry.spheres[i as usize];
@@ -251,9 +321,17 @@ impl<S: Sampler> Path<S> {
 
     /// Traces the current ray to its closest hit and shades it: emission,
     /// one shadow ray (NEE), the next direction and Russian roulette.
-    /// Returns whether the path has ended; its rays are counted in `rays`
-    /// ([`NoRayCount`] in the renderers).
-    pub fn step<C: RayCounter>(&mut self, params: &FrameParams, geometry: &Geometry, rays: &mut C) -> bool {
+    /// Shadow rays test `shadow_walls`, which must be
+    /// `ShadowWalls::new(params, geometry)`. Returns whether the path has
+    /// ended; its rays are counted in `rays` ([`NoRayCount`] in the
+    /// renderers).
+    pub fn step<C: RayCounter>(
+        &mut self,
+        params: &FrameParams,
+        geometry: &Geometry,
+        shadow_walls: &ShadowWalls,
+        rays: &mut C,
+    ) -> bool {
         let nee = params.flags & FLAG_NEE != 0;
         let mis = params.flags & FLAG_MIS != 0;
         let light = params.light;
@@ -323,7 +401,7 @@ impl<S: Sampler> Path<S> {
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
                 rays.ray();
-                if !occluded(&shadow, params, geometry, wall_index, dist) {
+                if !occluded(&shadow, params, geometry, shadow_walls, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
                     let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
@@ -417,10 +495,11 @@ fn pixel_samples<S: Sampler, C: RayCounter>(
     // Kahan compensation of the frame's sum: thousands of samples per frame
     // would otherwise drift (a sum of 65536 x 0.1 in f32 is off by 6e-4).
     let mut compensation = Vec3::ZERO;
+    let shadow_walls = ShadowWalls::new(params, geometry);
     let mut s = 0;
     let mut path = Path::<S>::camera(x, y, s, params);
     while s < params.samples_per_frame {
-        if path.step(params, geometry, rays) {
+        if path.step(params, geometry, &shadow_walls, rays) {
             let l = path.radiance;
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).
