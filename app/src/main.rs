@@ -639,13 +639,15 @@ fn defaults_section(points: &[bench::Point]) -> String {
          - 16 samples per pixel per frame for `render` (fewer dispatches; each lavapipe submission has a fixed \
          cost of several milliseconds). 4 per frame: {}; 1 per frame: {}. The viewer adapts its count to a \
          frame budget.\n\
-         - NEE with MIS. NEE alone: {}; BSDF sampling alone: {}. NEE alone and NEE with MIS are a tie \
-         here: the light is small (sin a = 0.09 from the floor), the cosine lobe rarely finds it and the glow \
-         lobe leaves its cone to NEE, so MIS gives NEE nearly all the weight and the two make the same image \
-         (same relMSE to 4 digits) at the same cost; which one leads moves with the machine. MIS stays for \
-         large or near lights (the ceiling right above this one sees it at sin a = 0.5), where BSDF samples \
-         carry part of the estimate with less variance. At the last vertex NEE takes the whole weight and \
-         no BSDF ray is traced.\n\
+         - NEE without MIS: after a bounce, light is gathered by shadow rays only, and a BSDF ray that \
+         hits the light adds nothing. NEE with MIS: {}; BSDF sampling alone: {}. The light is small here \
+         (sin a = 0.09 from the floor): the cosine lobe rarely finds it and the glow lobe leaves its cone to \
+         NEE, so MIS gives NEE nearly all the weight and both make the same image (the relMSE at 512 spp \
+         above agrees to 3 digits). MIS then only adds work, a BSDF density and a weight per shadow ray, \
+         and the two are a near tie that the cheaper one should win. MIS stays available (`FLAG_MIS`, the \
+         viewer's checkbox) for large or near lights, whose cone reaches below a surface's horizon: cone \
+         samples there are lost and BSDF samples find the visible part. At the last vertex no BSDF ray is \
+         traced either way.\n\
          - BSDF sampling: the cosine lobe mixed with the glow lobe around the light (probability 0.25, reach \
          0.125 in 1 - cos past the light's cone, density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` \
          in pt-core). Cosine lobe \

@@ -13,7 +13,7 @@
 use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
-use pt_core::params::{FLAG_GLOW, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
 use pt_core::ray::offset_origin;
 use pt_core::rng::Rng;
 use pt_core::sampling::cosine_hemisphere;
@@ -461,7 +461,7 @@ fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuEr
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),
         ("MIS off (NEE only after a bounce)", |s| s.flags = FLAG_NEE),
         ("NEE off, BSDF sampling with the glow lobe", |s| s.flags = FLAG_GLOW),
-        ("MIS off, BSDF sampling with the glow lobe", |s| s.flags = FLAG_NEE | FLAG_GLOW),
+        ("MIS on, BSDF sampling with the glow lobe", |s| s.flags |= FLAG_MIS),
         ("Russian roulette off", |s| s.settings.rr_start = 1_000_000),
         ("Russian roulette following luminance", |s| s.flags |= FLAG_RR_LUMINANCE),
     ];
