@@ -459,7 +459,7 @@ fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuEr
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("the glow lobe off (cosine BSDF sampling only)", |s| s.flags &= !FLAG_GLOW),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),
-        ("MIS off (NEE only after a bounce)", |s| s.flags = FLAG_NEE),
+        ("NEE alone on independent samples, cosine lobe only", |s| s.flags = FLAG_NEE),
         ("NEE off, BSDF sampling with the glow lobe", |s| s.flags = FLAG_GLOW),
         ("MIS on, BSDF sampling with the glow lobe", |s| s.flags |= FLAG_MIS),
         ("Russian roulette off", |s| s.settings.rr_start = 1_000_000),
