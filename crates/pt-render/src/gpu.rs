@@ -245,13 +245,21 @@ impl Kernel {
 }
 
 /// The kernel module. naga's SPIR-V front end reads what rust-gpu emits for
-/// this kernel, so wgpu validates it like any shader: no passthrough, no
-/// unchecked module.
+/// this kernel, so wgpu validates it like any shader (no passthrough), but
+/// without the runtime checks naga would add to the code it writes out: a
+/// clamp on every array index, and a counter on every loop that breaks out
+/// after 2^64 iterations. The kernel is Rust: rust-gpu keeps Rust's own
+/// bounds checks, and every loop in it is bounded (the per-pixel loop by
+/// `samples_per_frame` paths of at most `max_bounces + 1` segments, the
+/// object loops by counts clamped to the arrays, the shadow-wall loop by a
+/// 32-bit mask shifted each turn). Images are bit-identical; on lavapipe
+/// (256x256, 512 spp, 5 runs each) 10.73 s became 10.33 s.
 fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("pt-kernel"),
-        source: wgpu::util::make_spirv(KERNEL_SPV),
-    })
+    let desc = wgpu::ShaderModuleDescriptor { label: Some("pt-kernel"), source: wgpu::util::make_spirv(KERNEL_SPV) };
+    // SAFETY: see above: the kernel indexes only through Rust's bounds
+    // checks and has no unbounded loop, which is what the unchecked
+    // options ask of the caller.
+    unsafe { device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
 }
 
 /// The progressive GPU renderer for one scene and image size.
