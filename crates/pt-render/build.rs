@@ -12,7 +12,11 @@ use cargo_gpu_install::install::Install;
 use cargo_gpu_install::spirv_builder::{ShaderPanicStrategy, SpirvMetadata};
 
 fn main() -> anyhow::Result<()> {
-    let manifest_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    // Read at run time, not baked in with `env!`: cargo shares one compiled
+    // build script between checkouts that use the same target directory
+    // (its hashes of workspace paths are relative), and a baked-in path
+    // would build another checkout's kernel.
+    let manifest_dir = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR")?);
     let kernel_crate = manifest_dir.join("../../shaders-rs/pt-kernel");
 
     let install = Install::from_shader_crate(kernel_crate.clone()).run()?;
