@@ -299,11 +299,12 @@ pub struct Path<S> {
 }
 
 impl<S: Sampler> Path<S> {
-    /// Camera sample `s` of pixel (`x`, `y`) in this frame: a primary ray
+    /// Camera sample `s` of pixel (`x`, `y`) in this frame, whose sampler
+    /// part is `pixel` (`S::for_pixel(x, y, params)`): a primary ray
     /// jittered uniformly in the pixel (a box filter) by the sampler's first
     /// pair.
-    pub fn camera(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
-        let mut sampler = S::for_camera_sample(x, y, s, params);
+    pub fn camera(x: u32, y: u32, pixel: S::Pixel, s: u32, params: &FrameParams) -> Self {
+        let mut sampler = S::for_camera_sample(pixel, s, params);
         let u = sampler.next_2d();
         let ray = params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height);
         Self {
@@ -496,8 +497,9 @@ fn pixel_samples<S: Sampler, C: RayCounter>(
     // would otherwise drift (a sum of 65536 x 0.1 in f32 is off by 6e-4).
     let mut compensation = Vec3::ZERO;
     let shadow_walls = ShadowWalls::new(params, geometry);
+    let pixel = S::for_pixel(x, y, params);
     let mut s = 0;
-    let mut path = Path::<S>::camera(x, y, s, params);
+    let mut path = Path::<S>::camera(x, y, pixel, s, params);
     while s < params.samples_per_frame {
         if path.step(params, geometry, &shadow_walls, rays) {
             let l = path.radiance;
@@ -510,7 +512,7 @@ fn pixel_samples<S: Sampler, C: RayCounter>(
             }
             s += 1;
             if s < params.samples_per_frame {
-                path = Path::camera(x, y, s, params);
+                path = Path::camera(x, y, pixel, s, params);
             }
         }
     }

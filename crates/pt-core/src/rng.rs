@@ -39,7 +39,12 @@ impl Rng {
     /// The stream of camera sample `sample` of pixel (`x`, `y`) in frame
     /// `frame`, for the user's `seed`. Distinct inputs give unrelated streams.
     pub fn new(x: u32, y: u32, frame: u32, sample: u32, seed: u32) -> Self {
-        let h = pcg4d(UVec4::new(x, y, frame, sample ^ pcg_hash(seed)));
+        Self::with_seed_hash(x, y, frame, sample, pcg_hash(seed))
+    }
+
+    /// [`Rng::new`] given `pcg_hash(seed)`, which a pixel's samples share.
+    pub fn with_seed_hash(x: u32, y: u32, frame: u32, sample: u32, seed_hash: u32) -> Self {
+        let h = pcg4d(UVec4::new(x, y, frame, sample ^ seed_hash));
         Self { state: h.x ^ h.y.rotate_left(16) ^ h.z ^ h.w.rotate_left(8) }
     }
 

@@ -16,9 +16,15 @@ use crate::rng::{Rng, pcg_hash};
 
 /// What the path loop draws its random numbers from.
 pub trait Sampler {
-    /// The generator for camera sample `s` of pixel (`x`, `y`) in the frame
-    /// that `params` describes.
-    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self;
+    /// What the generators of one pixel's camera samples share in a frame
+    /// (hashes of the pixel and the seed): worked out once per pixel, not
+    /// once per sample.
+    type Pixel: Copy;
+    /// The shared part for pixel (`x`, `y`) in the frame that `params`
+    /// describes.
+    fn for_pixel(x: u32, y: u32, params: &FrameParams) -> Self::Pixel;
+    /// The generator for camera sample `s` of the pixel `pixel` was made for.
+    fn for_camera_sample(pixel: Self::Pixel, s: u32, params: &FrameParams) -> Self;
     /// The next number in [0, 1).
     fn next_1d(&mut self) -> f32;
     /// The next pair of numbers in [0, 1)^2.
@@ -26,8 +32,15 @@ pub trait Sampler {
 }
 
 impl Sampler for Rng {
-    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
-        Rng::new(x, y, params.frame, s, params.seed)
+    /// The pixel's coordinates and the hash of the seed.
+    type Pixel = (u32, u32, u32);
+
+    fn for_pixel(x: u32, y: u32, params: &FrameParams) -> Self::Pixel {
+        (x, y, pcg_hash(params.seed))
+    }
+
+    fn for_camera_sample((x, y, seed_hash): Self::Pixel, s: u32, params: &FrameParams) -> Self {
+        Rng::with_seed_hash(x, y, params.frame, s, seed_hash)
     }
 
     fn next_1d(&mut self) -> f32 {
@@ -109,11 +122,18 @@ pub struct SobolSampler {
 impl SobolSampler {
     /// The sampler of sample `index` of pixel (`x`, `y`) for `seed`.
     pub fn new(x: u32, y: u32, index: u32, seed: u32) -> Self {
-        Self {
-            index_reversed: index.reverse_bits(),
-            seed: pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed)))),
-            pair: 0,
-        }
+        Self::with_pixel_seed(Self::pixel_seed(x, y, seed), index)
+    }
+
+    /// The hash of pixel (`x`, `y`) and `seed` that all its samples share.
+    pub fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
+        pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed))))
+    }
+
+    /// The sampler of sample `index` of the pixel whose
+    /// [`SobolSampler::pixel_seed`] is `pixel_seed`.
+    pub fn with_pixel_seed(pixel_seed: u32, index: u32) -> Self {
+        Self { index_reversed: index.reverse_bits(), seed: pixel_seed, pair: 0 }
     }
 }
 
@@ -131,9 +151,16 @@ impl SobolSampler {
 }
 
 impl Sampler for SobolSampler {
-    fn for_camera_sample(x: u32, y: u32, s: u32, params: &FrameParams) -> Self {
+    /// [`SobolSampler::pixel_seed`].
+    type Pixel = u32;
+
+    fn for_pixel(x: u32, y: u32, params: &FrameParams) -> Self::Pixel {
+        SobolSampler::pixel_seed(x, y, params.seed)
+    }
+
+    fn for_camera_sample(pixel: Self::Pixel, s: u32, params: &FrameParams) -> Self {
         // The index runs on across frames: stratified over the whole render.
-        SobolSampler::new(x, y, params.sample_offset + s, params.seed)
+        SobolSampler::with_pixel_seed(pixel, params.sample_offset + s)
     }
 
     fn next_1d(&mut self) -> f32 {
