@@ -32,7 +32,7 @@ pub struct ThroughputConfig {
 }
 
 /// The configurations measured; the first is the original OpenGL design's.
-pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 5] = [
+pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
     ThroughputConfig {
         name: "original design: 1920x1080, 4 spp/frame, 5 bounces",
         width: 1920,
@@ -40,15 +40,16 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 5] = [
         spp: 4,
         bounces: 5,
     },
+    ThroughputConfig { name: "1920x1080, 16 spp/frame, 5 bounces", width: 1920, height: 1080, spp: 16, bounces: 5 },
     ThroughputConfig {
-        name: "1920x1080, 16 spp/frame (render's default), 5 bounces",
+        name: "1920x1080, 64 spp/frame (render's default), 5 bounces",
         width: 1920,
         height: 1080,
-        spp: 16,
+        spp: 64,
         bounces: 5,
     },
     ThroughputConfig { name: "512x512, 4 spp/frame, 5 bounces", width: 512, height: 512, spp: 4, bounces: 5 },
-    ThroughputConfig { name: "512x512, 16 spp/frame, 5 bounces", width: 512, height: 512, spp: 16, bounces: 5 },
+    ThroughputConfig { name: "512x512, 64 spp/frame, 5 bounces", width: 512, height: 512, spp: 64, bounces: 5 },
     ThroughputConfig { name: "512x512, 4 spp/frame, 1 bounce", width: 512, height: 512, spp: 4, bounces: 1 },
 ];
 
@@ -113,7 +114,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
         if let Some(ctx) = ctx {
             // Every workgroup shape on the first 512x512 configuration, the
             // default shape (8x8) everywhere.
-            let shapes = if cfg.name == THROUGHPUT_CONFIGS[2].name { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
+            let shapes = if cfg.name == THROUGHPUT_CONFIGS[3].name { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
             for shape in shapes {
                 let (times, timestamps) = time_gpu(ctx, params, scene, cfg.spp, reps, shape)?;
                 let (_, w, h) = WORKGROUP_SHAPES[shape];
@@ -234,45 +235,58 @@ pub struct Strategy {
     pub spp_per_frame: u32,
 }
 
+/// Samples per pixel per frame of `render` and of the default strategy.
+pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
+
 /// The strategies compared; the first is the default configuration
-/// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `render`'s 16 spp per frame), each
+/// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`), each
 /// other changes one thing.
 pub const STRATEGIES: [Strategy; 10] = [
     Strategy {
-        name: "default: Sobol, NEE (no MIS), glow lobe, RR from 5, 16 spp/frame",
+        name: "default: Sobol, NEE (no MIS), glow lobe, RR from 5, 64 spp/frame",
         flags: FLAGS_DEFAULT,
         rr_start: DEFAULT_RR_START,
-        spp_per_frame: 16,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         name: "independent samples (PCG)",
         flags: FLAGS_DEFAULT & !FLAG_SOBOL,
         rr_start: DEFAULT_RR_START,
-        spp_per_frame: 16,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
-    Strategy { name: "RR from 3, survival = max component", flags: FLAGS_DEFAULT, rr_start: 3, spp_per_frame: 16 },
+    Strategy {
+        name: "RR from 3, survival = max component",
+        flags: FLAGS_DEFAULT,
+        rr_start: 3,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
     Strategy {
         name: "RR from 3, survival = luminance",
         flags: FLAGS_DEFAULT | FLAG_RR_LUMINANCE,
         rr_start: 3,
-        spp_per_frame: 16,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
-    Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: 16 },
-    Strategy { name: "NEE with MIS", flags: FLAGS_DEFAULT | FLAG_MIS, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
+    Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: DEFAULT_SPP_PER_FRAME },
+    Strategy {
+        name: "NEE with MIS",
+        flags: FLAGS_DEFAULT | FLAG_MIS,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
     Strategy {
         name: "BSDF sampling only (no NEE)",
         flags: FLAGS_DEFAULT & !(FLAG_NEE | FLAG_MIS),
         rr_start: DEFAULT_RR_START,
-        spp_per_frame: 16,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         name: "cosine lobe only (no glow lobe)",
         flags: FLAGS_DEFAULT & !FLAG_GLOW,
         rr_start: DEFAULT_RR_START,
-        spp_per_frame: 16,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
+    Strategy { name: "16 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
     Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
-    Strategy { name: "1 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 1 },
 ];
 
 /// One point of a convergence curve.

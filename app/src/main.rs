@@ -194,9 +194,9 @@ struct RenderArgs {
     /// Output file: .png (exposure, tone map, sRGB) or .exr (linear mean radiance).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
-    /// Samples per pixel per frame (one GPU dispatch each); 16 was fastest
+    /// Samples per pixel per frame (one GPU dispatch each); 64 was fastest
     /// to a given error in `pathtracer bench` (docs/PERFORMANCE.md).
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = bench::DEFAULT_SPP_PER_FRAME, value_parser = clap::value_parser!(u32).range(1..))]
     spp_per_frame: u32,
     /// Exposure in stops, PNG only.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -550,8 +550,8 @@ fn bench_command(args: &BenchArgs) -> Result<()> {
         };
         report.push_str(&format!(
             "## Error against time\n\nScene: {}; {}x{} pixels, {} bounces; {} seeds per strategy; errors against {}. \
-             Each strategy renders progressively to {} spp; errors are measured at 4, 8, 16, ... spp, with time \
-             counted around synchronised frames only (readback and evaluation excluded). An untimed warm-up \
+             Each strategy renders progressively to {} spp; errors are measured at 4, 8, 16, ... spp (no frame \
+             spans a measurement), with time counted around synchronised frames only (readback and evaluation excluded). An untimed warm-up \
              render comes first, then every strategy once per seed in turn; each point takes the median time \
              and the mean relMSE of the seeds (the machine is shared: a single run can be slowed by half). \
              Equal time is the \
@@ -636,9 +636,13 @@ fn defaults_section(points: &[bench::Point]) -> String {
          - Survival rule: the throughput's largest component, clamped to [0.05, 1]. Following luminance \
          instead, both from bounce 3, took {} the time of the largest-component rule (after the red and green \
          walls luminance ends more paths: shorter paths, more colour noise there).\n\
-         - 16 samples per pixel per frame for `render` (fewer dispatches; each lavapipe submission has a fixed \
-         cost of several milliseconds). 4 per frame: {}; 1 per frame: {}. The viewer adapts its count to a \
-         frame budget.\n\
+         - 64 samples per pixel per frame for `render`. 16 per frame: {}; 4 per frame: {}. An invocation \
+         traces its pixel's samples of the frame one after another, and a SIMD group (8 lanes on lavapipe, 32 \
+         on NVIDIA) runs until its busiest lane is done: the more samples per frame, the smaller the spread of \
+         the lanes' summed path lengths against their mean, and the fewer dispatches (each with a fixed cost). \
+         Since no frame spans a measurement, every count from 64 up renders the same frames to 128 spp here; \
+         the throughput table compares 16 and 64 at 1920x1080. The viewer adapts its count to a frame \
+         budget.\n\
          - NEE without MIS: after a bounce, light is gathered by shadow rays only, and a BSDF ray that \
          hits the light adds nothing. NEE with MIS: {}; BSDF sampling alone: {}. The light is small here \
          (sin a = 0.09 from the floor): the cosine lobe rarely finds it and the glow lobe leaves its cone to \
