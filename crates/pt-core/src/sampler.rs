@@ -273,6 +273,27 @@ mod tests {
     }
 
     #[test]
+    fn per_pixel_part_gives_the_streams_of_the_direct_constructors() {
+        // The per-pixel hashes are a hoisting, not a change of streams:
+        // sample s of a frame is index sample_offset + s (Sobol) and stream
+        // (x, y, frame, s, seed) (PCG), bit for bit.
+        let params = FrameParams { seed: 42, frame: 3, sample_offset: 1000, ..FrameParams::default() };
+        for (x, y) in [(0u32, 0u32), (5, 9), (255, 17)] {
+            let (sobol, pcg) = (SobolSampler::for_pixel(x, y, &params), Rng::for_pixel(x, y, &params));
+            for s in [0u32, 1, 63] {
+                let mut split = SobolSampler::for_camera_sample(sobol, s, &params);
+                let mut direct = SobolSampler::new(x, y, 1000 + s, 42);
+                let mut split_pcg = Rng::for_camera_sample(pcg, s, &params);
+                let mut direct_pcg = Rng::new(x, y, 3, s, 42);
+                for _ in 0..4 {
+                    assert_eq!(split.next_2d(), direct.next_2d(), "pixel ({x}, {y}) sample {s}");
+                    assert_eq!(split_pcg.next_u32(), direct_pcg.next_u32(), "pixel ({x}, {y}) sample {s}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn sampler_values_are_in_unit_square_and_pairs_differ() {
         let mut s = SobolSampler::new(3, 4, 5, 6);
         let a = s.next_2d();
