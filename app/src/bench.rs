@@ -29,6 +29,9 @@ pub struct ThroughputConfig {
     pub spp: u32,
     /// Max bounces.
     pub bounces: u32,
+    /// Whether the GPU times every workgroup shape here, not only the
+    /// default one.
+    pub all_shapes: bool,
 }
 
 /// The configurations measured; the first is the original OpenGL design's.
@@ -39,18 +42,48 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         height: 1080,
         spp: 4,
         bounces: 5,
+        all_shapes: false,
     },
-    ThroughputConfig { name: "1920x1080, 16 spp/frame, 5 bounces", width: 1920, height: 1080, spp: 16, bounces: 5 },
+    ThroughputConfig {
+        name: "1920x1080, 16 spp/frame, 5 bounces",
+        width: 1920,
+        height: 1080,
+        spp: 16,
+        bounces: 5,
+        all_shapes: false,
+    },
     ThroughputConfig {
         name: "1920x1080, 64 spp/frame (render's default), 5 bounces",
         width: 1920,
         height: 1080,
         spp: 64,
         bounces: 5,
+        all_shapes: false,
     },
-    ThroughputConfig { name: "512x512, 4 spp/frame, 5 bounces", width: 512, height: 512, spp: 4, bounces: 5 },
-    ThroughputConfig { name: "512x512, 64 spp/frame, 5 bounces", width: 512, height: 512, spp: 64, bounces: 5 },
-    ThroughputConfig { name: "512x512, 4 spp/frame, 1 bounce", width: 512, height: 512, spp: 4, bounces: 1 },
+    ThroughputConfig {
+        name: "512x512, 4 spp/frame, 5 bounces",
+        width: 512,
+        height: 512,
+        spp: 4,
+        bounces: 5,
+        all_shapes: true,
+    },
+    ThroughputConfig {
+        name: "512x512, 64 spp/frame, 5 bounces",
+        width: 512,
+        height: 512,
+        spp: 64,
+        bounces: 5,
+        all_shapes: false,
+    },
+    ThroughputConfig {
+        name: "512x512, 4 spp/frame, 1 bounce",
+        width: 512,
+        height: 512,
+        spp: 4,
+        bounces: 1,
+        all_shapes: false,
+    },
 ];
 
 /// One measured row.
@@ -112,9 +145,9 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
         let rps = rays_per_sample(&params, scene)?;
         let samples = cfg.width as f64 * cfg.height as f64 * cfg.spp as f64;
         if let Some(ctx) = ctx {
-            // Every workgroup shape on the first 512x512 configuration, the
-            // default shape (8x8) everywhere.
-            let shapes = if cfg.name == THROUGHPUT_CONFIGS[3].name { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
+            // Every workgroup shape where the configuration asks for it, the
+            // default shape (8x8) elsewhere.
+            let shapes = if cfg.all_shapes { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
             for shape in shapes {
                 let (times, timestamps) = time_gpu(ctx, params, scene, cfg.spp, reps, shape)?;
                 let (_, w, h) = WORKGROUP_SHAPES[shape];

@@ -43,7 +43,7 @@ impl Rng {
     }
 
     /// [`Rng::new`] given `pcg_hash(seed)`, which a pixel's samples share.
-    pub fn with_seed_hash(x: u32, y: u32, frame: u32, sample: u32, seed_hash: u32) -> Self {
+    pub(crate) fn with_seed_hash(x: u32, y: u32, frame: u32, sample: u32, seed_hash: u32) -> Self {
         let h = pcg4d(UVec4::new(x, y, frame, sample ^ seed_hash));
         Self { state: h.x ^ h.y.rotate_left(16) ^ h.z ^ h.w.rotate_left(8) }
     }

@@ -126,13 +126,13 @@ impl SobolSampler {
     }
 
     /// The hash of pixel (`x`, `y`) and `seed` that all its samples share.
-    pub fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
+    fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
         pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed))))
     }
 
     /// The sampler of sample `index` of the pixel whose
     /// [`SobolSampler::pixel_seed`] is `pixel_seed`.
-    pub fn with_pixel_seed(pixel_seed: u32, index: u32) -> Self {
+    fn with_pixel_seed(pixel_seed: u32, index: u32) -> Self {
         Self { index_reversed: index.reverse_bits(), seed: pixel_seed, pair: 0 }
     }
 }
