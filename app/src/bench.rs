@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
@@ -274,9 +274,9 @@ pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
 /// The strategies compared; the first is the default configuration
 /// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`), each
 /// other changes one thing.
-pub const STRATEGIES: [Strategy; 10] = [
+pub const STRATEGIES: [Strategy; 11] = [
     Strategy {
-        name: "default: Sobol, NEE (no MIS), glow lobe, RR from 5, 64 spp/frame",
+        name: "default: Sobol (first 5 draws), NEE (no MIS), glow lobe, RR from 5, 64 spp/frame",
         flags: FLAGS_DEFAULT,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -320,6 +320,12 @@ pub const STRATEGIES: [Strategy; 10] = [
     },
     Strategy { name: "16 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
     Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
+    Strategy {
+        name: "Sobol for every draw",
+        flags: FLAGS_DEFAULT | FLAG_SOBOL_DEEP,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
 ];
 
 /// One point of a convergence curve.

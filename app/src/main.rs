@@ -629,7 +629,11 @@ fn defaults_section(points: &[bench::Point]) -> String {
         "\n## Defaults chosen from these measurements\n\n\
          Each figure is the time an alternative took to reach relMSE 1e-3, as a multiple of the default's \
          time on the same backend (above 1: the default is faster).\n\n\
-         - Samples: Owen-scrambled Sobol (Burley 2020). Independent PCG samples: {}.\n\
+         - Samples: Owen-scrambled Sobol (Burley 2020) for the first 5 draws of a path (pixel, then light \
+         and BSDF samples of two vertices), an independent PCG stream for later ones. Independent PCG \
+         samples throughout: {}; Sobol for every draw: {}. Deep in a path each Sobol pair is stratified alone, \
+         not jointly with the earlier ones, and gains little, while a Sobol draw costs four times the integer \
+         multiplies of a PCG draw (`SOBOL_DRAWS` in pt-core gives the choice of 5).\n\
          - Russian roulette from bounce 5, i.e. none within the default 5 bounces. From bounce 3: {}; from \
          bounce 1: {}. Its random cut-offs undo part of Sobol's stratification; it stays for deeper bounce \
          limits, where it bounds path length.\n\
@@ -667,6 +671,7 @@ fn defaults_section(points: &[bench::Point]) -> String {
          16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \
          workgroup fills half of a 32-wide warp.\n",
         vs_default(1),
+        vs_default(10),
         vs_default(2),
         vs_default(4),
         ratio(bench::STRATEGIES[3].name, bench::STRATEGIES[2].name),

@@ -6,7 +6,7 @@ use spirv_std::glam::{Vec2, Vec3};
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use crate::light::{GlowLobe, LightCone, light_cone};
-use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FrameParams};
+use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
@@ -473,7 +473,11 @@ pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, geometry: &Geometr
 /// sampler.
 fn pixel<C: RayCounter>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry, rays: &mut C) -> PixelSamples {
     if params.flags & FLAG_SOBOL != 0 {
-        pixel_samples::<SobolSampler, C>(x, y, params, geometry, rays)
+        if params.flags & FLAG_SOBOL_DEEP != 0 {
+            pixel_samples::<SobolSampler<{ u32::MAX }>, C>(x, y, params, geometry, rays)
+        } else {
+            pixel_samples::<SobolSampler, C>(x, y, params, geometry, rays)
+        }
     } else {
         pixel_samples::<Rng, C>(x, y, params, geometry, rays)
     }

@@ -22,8 +22,13 @@ pub const FLAG_RR_LUMINANCE: u32 = 8;
 /// `flags` bit: BSDF sampling mixes the glow lobe around the light
 /// (`light::GlowLobe`) into the cosine lobe.
 pub const FLAG_GLOW: u32 = 16;
+/// `flags` bit, with `FLAG_SOBOL`: every draw of a path is a Sobol point,
+/// not only the first `sampler::SOBOL_DRAWS` (the default, which takes the
+/// later ones from a PCG stream).
+pub const FLAG_SOBOL_DEEP: u32 = 32;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
-/// (without MIS) and the glow lobe, on Owen-scrambled Sobol samples. MIS
+/// (without MIS) and the glow lobe, on Owen-scrambled Sobol samples for the
+/// first draws of each path. MIS
 /// makes the same image in the default scene and costs more per sample.
 pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_SOBOL | FLAG_GLOW;
 

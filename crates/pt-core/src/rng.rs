@@ -48,6 +48,11 @@ impl Rng {
         Self { state: h.x ^ h.y.rotate_left(16) ^ h.z ^ h.w.rotate_left(8) }
     }
 
+    /// The stream whose state is `state`, which must already be a hash.
+    pub(crate) fn from_state(state: u32) -> Self {
+        Self { state }
+    }
+
     /// The next 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
         self.state = self.state.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);

@@ -13,7 +13,7 @@
 use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
 use pt_core::ray::offset_origin;
 use pt_core::rng::Rng;
 use pt_core::sampling::cosine_hemisphere;
@@ -455,8 +455,9 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 8] = [
+    let variants: [Variant; 9] = [
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
+        ("Sobol points for every draw, not the first ones only", |s| s.flags |= FLAG_SOBOL_DEEP),
         ("the glow lobe off (cosine BSDF sampling only)", |s| s.flags &= !FLAG_GLOW),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),
         ("NEE alone on independent samples, cosine lobe only", |s| s.flags = FLAG_NEE),
