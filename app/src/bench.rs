@@ -271,6 +271,9 @@ pub struct Strategy {
 /// Samples per pixel per frame of `render` and of the default strategy.
 pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
 
+// The default's name and the report's text say "first 5 draws".
+const _: () = assert!(pt_core::sampler::SOBOL_DRAWS == 5, "rename the default strategy and reword the report");
+
 /// The strategies compared; the first is the default configuration
 /// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`), each
 /// other changes one thing.

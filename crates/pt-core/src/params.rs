@@ -28,8 +28,8 @@ pub const FLAG_GLOW: u32 = 16;
 pub const FLAG_SOBOL_DEEP: u32 = 32;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS) and the glow lobe, on Owen-scrambled Sobol samples for the
-/// first draws of each path. MIS
-/// makes the same image in the default scene and costs more per sample.
+/// first draws of each path. MIS makes the same image in the default scene
+/// and costs more per sample.
 pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_SOBOL | FLAG_GLOW;
 
 /// `tonemap`: clamp to [0, 1] (no curve).
