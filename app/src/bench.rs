@@ -271,8 +271,13 @@ pub struct Strategy {
 /// Samples per pixel per frame of `render` and of the default strategy.
 pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
 
-// The default's name and the report's text say "first 5 draws".
-const _: () = assert!(pt_core::sampler::SOBOL_DRAWS == 5, "rename the default strategy and reword the report");
+// Three texts say "first 5 draws" and name the draws: the default's name
+// below, the report's defaults section and the `--sampler sobol` help (both
+// in main.rs). A change of SOBOL_DRAWS must reword all three.
+const _: () = assert!(
+    pt_core::sampler::SOBOL_DRAWS == 5,
+    "reword the default strategy's name, the report's defaults section and the --sampler help"
+);
 
 /// The strategies compared; the first is the default configuration
 /// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`), each
