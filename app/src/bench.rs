@@ -271,9 +271,10 @@ pub struct Strategy {
 /// Samples per pixel per frame of `render` and of the default strategy.
 pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
 
-// Three texts say "first 5 draws" and name the draws: the default's name
-// below, the report's defaults section and the `--sampler sobol` help (both
-// in main.rs). A change of SOBOL_DRAWS must reword all three.
+// Three texts of the program say "first 5 draws" and name the draws: the
+// default's name below, the report's defaults section and the `--sampler
+// sobol` help (both in main.rs). A change of SOBOL_DRAWS must reword all
+// three, and the README's and docs/ARCHITECTURE.md's, which say it too.
 const _: () = assert!(
     pt_core::sampler::SOBOL_DRAWS == 5,
     "reword the default strategy's name, the report's defaults section and the --sampler help"
