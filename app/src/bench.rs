@@ -271,13 +271,15 @@ pub struct Strategy {
 /// Samples per pixel per frame of `render` and of the default strategy.
 pub const DEFAULT_SPP_PER_FRAME: u32 = 64;
 
-// Three texts of the program say "first 5 draws" and name the draws: the
-// default's name below, the report's defaults section and the `--sampler
-// sobol` help (both in main.rs). A change of SOBOL_DRAWS must reword all
-// three, and the README's and docs/ARCHITECTURE.md's, which say it too.
+// The default's settings are spelled out in texts of the program: its name
+// below ("first 5 draws", "RR from 5", "64 spp/frame"), the report's
+// defaults section in main.rs (all three), and the `--sampler sobol` and
+// `--spp-per-frame` help in main.rs. A change of any of these constants
+// must reword them, and the README and docs/ARCHITECTURE.md, which state
+// them too.
 const _: () = assert!(
-    pt_core::sampler::SOBOL_DRAWS == 5,
-    "reword the default strategy's name, the report's defaults section and the --sampler help"
+    pt_core::sampler::SOBOL_DRAWS == 5 && DEFAULT_RR_START == 5 && DEFAULT_SPP_PER_FRAME == 64,
+    "reword the default strategy's name, the report's defaults section and the --sampler and --spp-per-frame help"
 );
 
 /// The strategies compared; the first is the default configuration
