@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
 use pt_core::{AccumPixel, FrameParams, integrator};
-use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, WORKGROUP_SHAPES};
+use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, TraceKernel, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
 use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
 use rayon::prelude::*;
@@ -30,8 +30,11 @@ pub struct ThroughputConfig {
     /// Max bounces.
     pub bounces: u32,
     /// Whether the GPU times every workgroup shape here, not only the
-    /// default one.
+    /// default one (with the general kernel, the only one they come in).
     pub all_shapes: bool,
+    /// Whether the GPU times both forms of the trace kernel here, not only
+    /// the adapter's default.
+    pub both_kernels: bool,
 }
 
 /// The configurations measured; the first is the original OpenGL design's.
@@ -43,6 +46,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 4,
         bounces: 5,
         all_shapes: false,
+        both_kernels: false,
     },
     ThroughputConfig {
         name: "1920x1080, 16 spp/frame, 5 bounces",
@@ -51,6 +55,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 16,
         bounces: 5,
         all_shapes: false,
+        both_kernels: false,
     },
     ThroughputConfig {
         name: "1920x1080, 64 spp/frame (render's default), 5 bounces",
@@ -59,6 +64,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 64,
         bounces: 5,
         all_shapes: false,
+        both_kernels: true,
     },
     ThroughputConfig {
         name: "512x512, 4 spp/frame, 5 bounces",
@@ -67,6 +73,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 4,
         bounces: 5,
         all_shapes: true,
+        both_kernels: false,
     },
     ThroughputConfig {
         name: "512x512, 64 spp/frame, 5 bounces",
@@ -75,6 +82,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 64,
         bounces: 5,
         all_shapes: false,
+        both_kernels: false,
     },
     ThroughputConfig {
         name: "512x512, 4 spp/frame, 1 bounce",
@@ -83,6 +91,7 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
         spp: 4,
         bounces: 1,
         all_shapes: false,
+        both_kernels: false,
     },
 ];
 
@@ -145,13 +154,18 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
         let rps = rays_per_sample(&params, scene)?;
         let samples = cfg.width as f64 * cfg.height as f64 * cfg.spp as f64;
         if let Some(ctx) = ctx {
-            // Every workgroup shape where the configuration asks for it, the
-            // default shape (8x8) elsewhere.
-            let shapes = if cfg.all_shapes { 0..WORKGROUP_SHAPES.len() } else { 0..1 };
-            for shape in shapes {
-                let (times, timestamps) = time_gpu(ctx, params, scene, cfg.spp, reps, shape)?;
-                let (_, w, h) = WORKGROUP_SHAPES[shape];
-                let backend = format!("GPU: {}, workgroup {w}x{h}", ctx.adapter_info.name);
+            // The adapter's default kernel and shape; the other kernel and
+            // the other shapes where the configuration asks for them.
+            let mut setups = vec![GpuSetup::Default];
+            if cfg.both_kernels {
+                setups.push(GpuSetup::OtherKernel);
+            }
+            if cfg.all_shapes {
+                setups.extend((1..WORKGROUP_SHAPES.len()).map(GpuSetup::Shape));
+            }
+            for setup in setups {
+                let (times, timestamps, label) = time_gpu(ctx, params, scene, cfg.spp, reps, setup)?;
+                let backend = format!("GPU: {}, {label}", ctx.adapter_info.name);
                 rows.push(row(cfg, backend, times, samples, rps, timestamps));
             }
         }
@@ -171,19 +185,46 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
 /// Least time the GPU works before a throughput configuration is timed.
 const WARM_UP_SECONDS: f64 = 0.5;
 
-/// Seconds of `reps` frames on the GPU after the warm-up, with the
-/// `accumulate` entry point of `WORKGROUP_SHAPES[shape]`; and whether they
-/// come from timestamps.
+/// Which trace kernel a GPU throughput row times.
+#[derive(Copy, Clone)]
+enum GpuSetup {
+    /// The renderer's own choice for the adapter, in the default shape.
+    Default,
+    /// The other form of the trace kernel, in the default shape.
+    OtherKernel,
+    /// The general kernel in `WORKGROUP_SHAPES[i]`.
+    Shape(usize),
+}
+
+/// Seconds of `reps` frames on the GPU after the warm-up, with the kernel
+/// `setup` picks; whether they come from timestamps; and the kernel and
+/// shape that ran, for the report.
 fn time_gpu(
     ctx: &GpuContext,
     params: FrameParams,
     scene: &Scene,
     spp: u32,
     reps: usize,
-    shape: usize,
-) -> Result<(Vec<f64>, bool)> {
+    setup: GpuSetup,
+) -> Result<(Vec<f64>, bool, String)> {
     let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres())?;
-    r.set_workgroup_shape(ctx, shape);
+    let mut shape = 0;
+    match setup {
+        GpuSetup::Default => {}
+        GpuSetup::OtherKernel => {
+            let other = match r.trace_kernel() {
+                TraceKernel::General => TraceKernel::SmallScene,
+                TraceKernel::SmallScene => TraceKernel::General,
+            };
+            r.set_trace_kernel(ctx, other);
+        }
+        GpuSetup::Shape(i) => {
+            r.set_workgroup_shape(ctx, i);
+            shape = i;
+        }
+    }
+    let (_, w, h) = WORKGROUP_SHAPES[shape];
+    let label = format!("workgroup {w}x{h}, {}", r.trace_kernel().name());
     let timer = if ctx.is_software() { None } else { GpuTimer::new(ctx) };
     // Warm-up: frames until half a second has passed (at least one). A GPU
     // left idle while the CPU counted rays runs its first frames at idle
@@ -208,7 +249,7 @@ fn time_gpu(
             None => wall,
         });
     }
-    Ok((times, timer.is_some()))
+    Ok((times, timer.is_some(), label))
 }
 
 fn row(

@@ -3,12 +3,12 @@
 //!
 //! Why a uniform block and not storage buffers: every ray tests every wall
 //! and sphere in the same order, so all invocations read the same element at
-//! the same time. lavapipe (Mesa's llvmpipe) turns a uniform-block read at a
-//! dynamically uniform offset into one scalar load broadcast to its SIMD
-//! lanes, but reads a storage buffer one lane at a time behind a bounds
-//! check (Mesa 22.3, `emit_load_ubo` against `emit_load_mem` in
-//! `lp_bld_nir_soa.c`); GPUs serve such reads from their constant caches.
-//! docs/PERFORMANCE.md has the measured difference.
+//! the same time, which GPUs serve from their constant caches. lavapipe
+//! (Mesa's llvmpipe) reads either kind lane by lane, but a uniform read as
+//! one bounds-checked gather, a storage read as a loop over the lanes with a
+//! branch in each (Mesa 22.3, `emit_load_ubo` against `emit_load_mem` in
+//! `lp_bld_nir_soa.c`); docs/ARCHITECTURE.md has the measured difference.
+//! For small scenes lavapipe avoids both: see [`crate::small_scene`].
 
 use bytemuck::{Pod, Zeroable};
 

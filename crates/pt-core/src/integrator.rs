@@ -11,6 +11,7 @@ use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
 use crate::sampling::{PI, about_axis, cosine_polar, power_heuristic};
+use crate::small_scene::SmallScene;
 use crate::sphere::{intersect_sphere, sphere_hit_point};
 use crate::wall::intersect_wall;
 
@@ -129,6 +130,11 @@ impl ShadowWalls {
         walls
     }
 
+    /// Whether no wall can block a shadow ray.
+    pub fn is_empty(&self) -> bool {
+        self.low | self.middle | self.high == 0
+    }
+
     /// Every wall in use, for tests to compare against.
     #[cfg(test)]
     pub(crate) fn all(params: &FrameParams) -> Self {
@@ -184,6 +190,26 @@ pub fn occluded(
         i += 1;
     }
     false
+}
+
+/// The walls and spheres a path is traced against, and how they are read:
+/// the uniform block itself ([`Geometry`], in loops, for any scene), or a
+/// copy of a small one ([`crate::small_scene::SmallScene`]).
+pub trait Objects {
+    /// The closest hit in (0, `t_max`): see [`closest_hit`].
+    fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit;
+    /// Whether the shadow ray is blocked in (0, `t_max`): see [`occluded`].
+    fn occluded(&self, ray: &Ray, params: &FrameParams, walls: &ShadowWalls, skip_wall: u32, t_max: f32) -> bool;
+}
+
+impl Objects for Geometry {
+    fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
+        closest_hit(ray, params, self, skip_wall, t_max)
+    }
+
+    fn occluded(&self, ray: &Ray, params: &FrameParams, walls: &ShadowWalls, skip_wall: u32, t_max: f32) -> bool {
+        occluded(ray, params, self, walls, skip_wall, t_max)
+    }
 }
 
 /// Counts the rays a path traces (closest-hit and shadow rays), for the
@@ -320,16 +346,18 @@ impl<S: Sampler> Path<S> {
         }
     }
 
-    /// Traces the current ray to its closest hit and shades it: emission,
-    /// one shadow ray (NEE), the next direction and Russian roulette.
-    /// Shadow rays test `shadow_walls`, which must be
-    /// `ShadowWalls::new(params, geometry)`. Returns whether the path has
-    /// ended; its rays are counted in `rays` ([`NoRayCount`] in the
-    /// renderers).
-    pub fn step<C: RayCounter>(
+    /// Traces the current ray to its closest hit among `objects` and shades
+    /// it: emission, one shadow ray (NEE), the next direction and Russian
+    /// roulette. `objects` holds the walls and spheres of `geometry`, which
+    /// shading reads the hit's normal and albedo from. Shadow rays test
+    /// `shadow_walls`, which must be `ShadowWalls::new(params, geometry)`.
+    /// Returns whether the path has ended; its rays are counted in `rays`
+    /// ([`NoRayCount`] in the renderers).
+    pub fn step<O: Objects, C: RayCounter>(
         &mut self,
         params: &FrameParams,
         geometry: &Geometry,
+        objects: &O,
         shadow_walls: &ShadowWalls,
         rays: &mut C,
     ) -> bool {
@@ -339,7 +367,7 @@ impl<S: Sampler> Path<S> {
         let ray = Ray { origin: self.origin, dir: self.dir };
 
         rays.ray();
-        let hit = closest_hit(&ray, params, geometry, self.skip_wall, T_FAR);
+        let hit = objects.closest_hit(&ray, params, self.skip_wall, T_FAR);
         if hit.kind == HitKind::Nothing {
             self.radiance += self.throughput * params.background;
             return true;
@@ -402,7 +430,7 @@ impl<S: Sampler> Path<S> {
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
                 rays.ray();
-                if !occluded(&shadow, params, geometry, shadow_walls, wall_index, dist) {
+                if !objects.occluded(&shadow, params, shadow_walls, wall_index, dist) {
                     let bsdf = cos * (1.0 / PI);
                     let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
@@ -457,7 +485,14 @@ impl<S: Sampler> Path<S> {
 /// camera samples, from independent PCG streams or from the Owen-scrambled
 /// Sobol sequence (`FLAG_SOBOL`), non-finite results counted and discarded.
 pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
-    pixel(x, y, params, geometry, &mut NoRayCount)
+    pixel(x, y, params, geometry, geometry, &mut NoRayCount)
+}
+
+/// [`render_pixel`] on a copy of the scene read at constant indices
+/// ([`SmallScene`]), for a scene that [`SmallScene::fits`]: the same
+/// samples, faster on lavapipe.
+pub fn render_pixel_small(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
+    pixel(x, y, params, geometry, &SmallScene::new(params, geometry), &mut NoRayCount)
 }
 
 /// Rays traced by the samples of pixel (`x`, `y`) in one frame: what
@@ -465,21 +500,28 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 #[cfg(not(target_arch = "spirv"))]
 pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> u64 {
     let mut count = RayCount::default();
-    pixel(x, y, params, geometry, &mut count);
+    pixel(x, y, params, geometry, geometry, &mut count);
     count.0
 }
 
 /// [`render_pixel`] with its rays counted: the one place that picks the
 /// sampler.
-fn pixel<C: RayCounter>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry, rays: &mut C) -> PixelSamples {
+fn pixel<O: Objects, C: RayCounter>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    geometry: &Geometry,
+    objects: &O,
+    rays: &mut C,
+) -> PixelSamples {
     if params.flags & FLAG_SOBOL != 0 {
         if params.flags & FLAG_SOBOL_DEEP != 0 {
-            pixel_samples::<SobolSampler<{ u32::MAX }>, C>(x, y, params, geometry, rays)
+            pixel_samples::<SobolSampler<{ u32::MAX }>, O, C>(x, y, params, geometry, objects, rays)
         } else {
-            pixel_samples::<SobolSampler, C>(x, y, params, geometry, rays)
+            pixel_samples::<SobolSampler, O, C>(x, y, params, geometry, objects, rays)
         }
     } else {
-        pixel_samples::<Rng, C>(x, y, params, geometry, rays)
+        pixel_samples::<Rng, O, C>(x, y, params, geometry, objects, rays)
     }
 }
 
@@ -489,11 +531,12 @@ fn pixel<C: RayCounter>(x: u32, y: u32, params: &FrameParams, geometry: &Geometr
 /// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
 /// instead of waiting each sample for their longest path. Samples are added
 /// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
-fn pixel_samples<S: Sampler, C: RayCounter>(
+fn pixel_samples<S: Sampler, O: Objects, C: RayCounter>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
+    objects: &O,
     rays: &mut C,
 ) -> PixelSamples {
     let mut out = PixelSamples::default();
@@ -505,7 +548,7 @@ fn pixel_samples<S: Sampler, C: RayCounter>(
     let mut s = 0;
     let mut path = Path::<S>::camera(x, y, pixel, s, params);
     while s < params.samples_per_frame {
-        if path.step(params, geometry, &shadow_walls, rays) {
+        if path.step(params, geometry, objects, &shadow_walls, rays) {
             let l = path.radiance;
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).

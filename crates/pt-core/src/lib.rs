@@ -16,6 +16,7 @@ pub mod ray;
 pub mod rng;
 pub mod sampler;
 pub mod sampling;
+pub mod small_scene;
 pub mod sphere;
 pub mod tonemap;
 pub mod wall;

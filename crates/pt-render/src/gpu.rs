@@ -3,6 +3,7 @@
 
 use std::sync::{Arc, Mutex};
 
+use pt_core::small_scene::SmallScene;
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
@@ -197,6 +198,29 @@ struct Kernel {
     trace_pipeline_layout: wgpu::PipelineLayout,
 }
 
+/// The two forms of the trace kernel.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum TraceKernel {
+    /// `accumulate` (and its other workgroup shapes): the uniform block read
+    /// in loops, for any scene. The default on GPUs.
+    General,
+    /// `accumulate_small`: a copy of a small scene read at constant indices
+    /// (`pt_core::small_scene`), for scenes that `SmallScene::fits`; frames
+    /// of other scenes use `General`. The default on CPU adapters (lavapipe),
+    /// where it measured faster (docs/ARCHITECTURE.md).
+    SmallScene,
+}
+
+impl TraceKernel {
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::General => "general kernel",
+            Self::SmallScene => "small-scene kernel",
+        }
+    }
+}
+
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
 /// (entry point, width, height). The first is the default.
 pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] =
@@ -278,6 +302,10 @@ pub struct GpuRenderer {
     trace_group: wgpu::BindGroup,
     display_group: wgpu::BindGroup,
     params: FrameParams,
+    /// The geometry block's contents, for [`SmallScene::fits`].
+    geometry: Box<Geometry>,
+    /// `accumulate_small`, where the small-scene kernel is chosen.
+    accumulate_small: Option<wgpu::ComputePipeline>,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
@@ -334,14 +362,13 @@ fn bind_group(
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("pt-kernel"), layout, entries: &entries })
 }
 
-/// The uniform block holding `walls` and `spheres`.
-fn geometry_buffer(device: &wgpu::Device, walls: &[Wall], spheres: &[Sphere]) -> Result<wgpu::Buffer, GpuError> {
-    let geometry = crate::scene::geometry(walls, spheres)?;
-    Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+/// The uniform buffer holding `geometry`.
+fn geometry_buffer(device: &wgpu::Device, geometry: &Geometry) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("geometry"),
-        contents: bytemuck::bytes_of(&geometry),
+        contents: bytemuck::bytes_of(geometry),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-    }))
+    })
 }
 
 impl GpuRenderer {
@@ -356,7 +383,8 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let geometry_buf = geometry_buffer(&device, walls, spheres)?;
+        let geometry = Box::new(crate::scene::geometry(walls, spheres)?);
+        let geometry_buf = geometry_buffer(&device, &geometry);
         let (accum_buf, display_buf) = Self::image_buffers(&device, params.width, params.height)?;
         let non_finite_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("non-finite count"),
@@ -374,7 +402,8 @@ impl GpuRenderer {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
-        Ok(Self {
+        let kernel = if ctx.is_software() { TraceKernel::SmallScene } else { TraceKernel::General };
+        let mut renderer = Self {
             device,
             queue: ctx.queue.clone(),
             trace_layout,
@@ -389,10 +418,14 @@ impl GpuRenderer {
             trace_group,
             display_group,
             params,
+            geometry,
+            accumulate_small: None,
             next_frame: 0,
             samples_done: 0,
             trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
-        })
+        };
+        renderer.set_trace_kernel(ctx, kernel);
+        Ok(renderer)
     }
 
     fn image_buffers(device: &wgpu::Device, width: u32, height: u32) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
@@ -442,8 +475,8 @@ impl GpuRenderer {
     /// Replaces the geometry (walls and spheres). The block has a fixed
     /// size, so it is rewritten in place (ordered before the next frame).
     pub fn set_geometry(&mut self, walls: &[Wall], spheres: &[Sphere]) -> Result<(), GpuError> {
-        let geometry = crate::scene::geometry(walls, spheres)?;
-        self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&geometry));
+        *self.geometry = crate::scene::geometry(walls, spheres)?;
+        self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&*self.geometry));
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
         Ok(())
@@ -481,13 +514,39 @@ impl GpuRenderer {
         (self.params.width.div_ceil(WORKGROUP_SIZE), self.params.height.div_ceil(WORKGROUP_SIZE))
     }
 
-    /// Traces with the `accumulate` entry point of `WORKGROUP_SHAPES[shape]`
-    /// (compiled now; benchmarks compare the shapes).
+    /// Traces with the general kernel's entry point of
+    /// `WORKGROUP_SHAPES[shape]` (compiled now; benchmarks compare the
+    /// shapes).
     pub fn set_workgroup_shape(&mut self, ctx: &GpuContext, shape: usize) {
         let (entry, w, h) = WORKGROUP_SHAPES[shape];
         let k = ctx.kernel();
         self.accumulate = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry);
         self.trace_shape = (w, h);
+        self.accumulate_small = None;
+    }
+
+    /// Chooses the form of the trace kernel (compiled now if need be; the
+    /// renderer starts with the adapter's default). The small-scene kernel
+    /// comes in the default 8x8 shape only.
+    pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
+        if kernel == TraceKernel::SmallScene {
+            self.set_workgroup_shape(ctx, 0);
+            let k = ctx.kernel();
+            let small = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, "accumulate_small");
+            self.accumulate_small = Some(small);
+        } else {
+            self.accumulate_small = None;
+        }
+    }
+
+    /// The kernel the next frame runs: the small-scene kernel where it is
+    /// chosen and the scene fits it, else the general one.
+    pub fn trace_kernel(&self) -> TraceKernel {
+        if self.accumulate_small.is_some() && SmallScene::fits(&self.params, &self.geometry) {
+            TraceKernel::SmallScene
+        } else {
+            TraceKernel::General
+        }
     }
 
     /// Submits one frame of `samples` samples per pixel. Nothing waits: the
@@ -532,7 +591,11 @@ impl GpuRenderer {
         let (x, y) = (self.params.width.div_ceil(self.trace_shape.0), self.params.height.div_ceil(self.trace_shape.1));
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
-        pass.set_pipeline(&self.accumulate);
+        let pipeline = match (&self.accumulate_small, self.trace_kernel()) {
+            (Some(small), TraceKernel::SmallScene) => small,
+            _ => &self.accumulate,
+        };
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.trace_group, &[]);
         pass.dispatch_workgroups(x, y, 1);
     }

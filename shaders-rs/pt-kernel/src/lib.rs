@@ -15,8 +15,10 @@ use spirv_std::spirv;
 /// Adds one frame of `samples_per_frame` samples to pixel `id`'s sum, and
 /// counts the non-finite samples it discarded. The `accumulate*` entry
 /// points differ only in their workgroup shape (`pathtracer bench`
-/// compares them); `accumulate` (8 x 8) is the default.
-fn accumulate_pixel(
+/// compares them); `accumulate` (8 x 8) is the default. `SMALL`: trace a
+/// copy of the scene ([`integrator::render_pixel_small`]), for
+/// `accumulate_small`.
+fn accumulate_pixel<const SMALL: bool>(
     id: UVec3,
     params: &FrameParams,
     geometry: &Geometry,
@@ -26,7 +28,15 @@ fn accumulate_pixel(
     if id.x >= params.width || id.y >= params.height {
         return;
     }
-    let samples = integrator::render_pixel(id.x, id.y, params, geometry);
+    let samples = if SMALL {
+        // The parameters in the invocation's own memory too: lavapipe
+        // would otherwise gather each of them from the uniform block at
+        // every read.
+        let params = *params;
+        integrator::render_pixel_small(id.x, id.y, &params, geometry)
+    } else {
+        integrator::render_pixel(id.x, id.y, params, geometry)
+    };
     // width != 0 always; the driver cannot know it (see `kahan_add`).
     accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
@@ -45,6 +55,9 @@ fn accumulate_pixel(
 
 macro_rules! accumulate_entry {
     ($name:ident, $x:literal, $y:literal) => {
+        accumulate_entry!($name, $x, $y, false);
+    };
+    ($name:ident, $x:literal, $y:literal, $small:literal) => {
         /// [`accumulate_pixel`] in workgroups of this shape.
         #[spirv(compute(threads($x, $y)))]
         pub fn $name(
@@ -54,7 +67,7 @@ macro_rules! accumulate_entry {
             #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
         ) {
-            accumulate_pixel(id, params, geometry, accum, non_finite);
+            accumulate_pixel::<$small>(id, params, geometry, accum, non_finite);
         }
     };
 }
@@ -63,6 +76,8 @@ accumulate_entry!(accumulate, 8, 8);
 accumulate_entry!(accumulate_16x4, 16, 4);
 accumulate_entry!(accumulate_32x2, 32, 2);
 accumulate_entry!(accumulate_4x4, 4, 4);
+// For scenes that `SmallScene::fits`: the renderer's choice on lavapipe.
+accumulate_entry!(accumulate_small, 8, 8, true);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
 #[spirv(compute(threads(8, 8)))]

@@ -1,0 +1,250 @@
+//! A small scene copied into the invocation's own memory and read at
+//! constant indices: the form of the hit tests that a SIMD-on-CPU driver
+//! runs fastest.
+//!
+//! What lavapipe (Mesa 22.3) does with the general loops of
+//! [`crate::integrator::closest_hit`] and [`crate::integrator::occluded`]:
+//! - It reads the uniform block lane by lane: a bounds-checked gather of
+//!   one scalar load per lane and component, for every read
+//!   (`visit_load_ubo` in `lp_bld_nir_soa.c` broadcasts one load only where
+//!   `nir_src_is_always_uniform` holds of the offset, and an offset built
+//!   from a descriptor is never that).
+//! - An `if` is not a branch: both sides run, under a lane mask. Only a
+//!   loop's back edge is, and a loop's body runs at least once, masked off
+//!   when it has nothing to do: the shadow-wall loop of a closed room costs
+//!   three wall tests per shadow ray.
+//!
+//! Here the walls and spheres are copied once per pixel and frame, and the
+//! tests are unrolled over the copy's fixed capacity: no gathers, no empty
+//! loops. The price is a test per unused slot, masked off, and the scene
+//! must fit ([`SmallScene::fits`]); the renderer picks this form where both
+//! hold and the adapter is a CPU, and the general one elsewhere
+//! (docs/ARCHITECTURE.md has the measured figures).
+
+use crate::geometry::Geometry;
+use crate::integrator::{Hit, HitKind, Objects, ShadowWalls};
+use crate::params::FrameParams;
+use crate::ray::Ray;
+use crate::sphere::{Sphere, intersect_sphere};
+use crate::wall::{Wall, intersect_wall};
+
+/// Walls a small scene holds at most: a room of six, and two to spare.
+pub const SMALL_WALLS: u32 = 8;
+
+/// Spheres (besides the light) a small scene holds at most.
+pub const SMALL_SPHERES: u32 = 4;
+
+/// Calls `f(0)`, `f(1)`, ..., `f(N - 1)` (N at most 8), each with a literal
+/// index: once inlined, every read of the copy has a constant offset, and
+/// the driver keeps the copy in registers instead of indexing memory.
+#[inline(always)]
+fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
+    const { assert!(N <= 8) };
+    if N > 0 {
+        f(0);
+    }
+    if N > 1 {
+        f(1);
+    }
+    if N > 2 {
+        f(2);
+    }
+    if N > 3 {
+        f(3);
+    }
+    if N > 4 {
+        f(4);
+    }
+    if N > 5 {
+        f(5);
+    }
+    if N > 6 {
+        f(6);
+    }
+    if N > 7 {
+        f(7);
+    }
+}
+
+/// The first [`SMALL_WALLS`] walls and [`SMALL_SPHERES`] spheres of a
+/// scene, with the counts in use. Built once per pixel and frame.
+pub struct SmallScene {
+    walls: [Wall; SMALL_WALLS as usize],
+    spheres: [Sphere; SMALL_SPHERES as usize],
+    wall_count: u32,
+    sphere_count: u32,
+}
+
+impl SmallScene {
+    /// Whether this form renders the scene exactly as the general one: it
+    /// holds every wall and sphere, and no wall can block a shadow ray
+    /// (which is what a closed room with the light inside gives), so that
+    /// shadow rays test spheres only.
+    pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
+        params.wall_count <= SMALL_WALLS
+            && params.sphere_count <= SMALL_SPHERES
+            && ShadowWalls::new(params, geometry).is_empty()
+    }
+
+    /// The copy of `geometry`'s first walls and spheres. Counts beyond the
+    /// capacity are clamped: the caller checks [`SmallScene::fits`].
+    pub fn new(params: &FrameParams, geometry: &Geometry) -> Self {
+        let w = &geometry.walls;
+        let s = &geometry.spheres;
+        Self {
+            walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
+            spheres: [s[0], s[1], s[2], s[3]],
+            wall_count: params.wall_count.min(SMALL_WALLS),
+            sphere_count: params.sphere_count.min(SMALL_SPHERES),
+        }
+    }
+}
+
+impl Objects for SmallScene {
+    /// The same tests as [`crate::integrator::closest_hit`], in the same
+    /// order, on the copy.
+    fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
+        let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
+        unrolled::<SMALL_WALLS>(|i| {
+            if i < self.wall_count && i != skip_wall {
+                let t = intersect_wall(&self.walls[i as usize], ray, 0.0, hit.t);
+                if t < hit.t {
+                    hit = Hit { t, kind: HitKind::Wall, index: i };
+                }
+            }
+        });
+        unrolled::<SMALL_SPHERES>(|i| {
+            if i < self.sphere_count {
+                let s = &self.spheres[i as usize];
+                let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
+                if t < hit.t {
+                    hit = Hit { t, kind: HitKind::Sphere, index: i };
+                }
+            }
+        });
+        let t = intersect_sphere(params.light.center, params.light.radius, ray, 0.0, hit.t);
+        if t < hit.t {
+            hit = Hit { t, kind: HitKind::Light, index: 0 };
+        }
+        hit
+    }
+
+    /// Spheres only: [`SmallScene::fits`] leaves no wall that can block a
+    /// shadow ray.
+    fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, _skip_wall: u32, t_max: f32) -> bool {
+        let mut blocked = false;
+        unrolled::<SMALL_SPHERES>(|i| {
+            let s = &self.spheres[i as usize];
+            blocked |= i < self.sphere_count && intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max;
+        });
+        blocked
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::closest_hit;
+    use crate::light::{SphereLight, light_cone};
+    use crate::rng::Rng;
+    use spirv_std::glam::Vec3;
+
+    /// Up to 8 walls: the default room (floor, ceiling, back, left, right),
+    /// a front wall and two panels inside; up to 4 spheres.
+    fn scene(walls: usize, spheres: usize, light: Vec3) -> (FrameParams, Geometry) {
+        let v = Vec3::new;
+        let a = Vec3::splat(0.73);
+        let all_walls = [
+            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
+            Wall::new(v(-1.0, 2.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
+            Wall::new(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
+            Wall::new(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
+            Wall::new(v(1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
+            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
+            Wall::new(v(-0.5, 0.2, 0.0), v(0.6, 0.3, 0.0), v(0.0, 0.5, 0.4), a),
+            Wall::new(v(0.2, 1.0, -0.5), v(0.5, 0.0, 0.2), v(0.1, 0.4, 0.0), a),
+        ];
+        let all_spheres = [
+            Sphere::new(v(-0.45, 0.40, -0.30), 0.40, a),
+            Sphere::new(v(0.50, 0.28, 0.35), 0.28, a),
+            Sphere::new(v(0.6, 1.5, -0.6), 0.2, a),
+            Sphere::new(v(-0.6, 1.2, 0.5), 0.1, a),
+        ];
+        let geometry = Geometry::new(&all_walls[..walls], &all_spheres[..spheres]).unwrap();
+        let params = FrameParams {
+            light: SphereLight::new(light, 0.15, Vec3::splat(20.0)),
+            wall_count: walls as u32,
+            sphere_count: spheres as u32,
+            ..Default::default()
+        };
+        (params, geometry)
+    }
+
+    const LIGHT: Vec3 = Vec3::new(0.0, 1.7, 0.0);
+
+    #[test]
+    fn fits_a_room_with_the_light_inside_and_nothing_more() {
+        let fits = |walls, spheres, light| {
+            let (params, geometry) = scene(walls, spheres, light);
+            SmallScene::fits(&params, &geometry)
+        };
+        assert!(fits(5, 2, LIGHT), "the default scene");
+        assert!(fits(6, 4, LIGHT), "a closed room, four spheres");
+        assert!(!fits(7, 2, LIGHT), "a panel inside the room can shadow the light");
+        assert!(!fits(5, 2, Vec3::new(0.0, 1.0, -1.6)), "the back wall is between the light and the room");
+        let (mut params, geometry) = scene(5, 2, LIGHT);
+        params.sphere_count = SMALL_SPHERES + 1;
+        assert!(!SmallScene::fits(&params, &geometry));
+        params.sphere_count = 2;
+        params.wall_count = SMALL_WALLS + 1;
+        assert!(!SmallScene::fits(&params, &geometry));
+    }
+
+    /// Rays from random points in the room in random directions, and from
+    /// points on its surfaces (leaving their wall): the copy finds exactly
+    /// the hit that the uniform block's loops find, for every count of
+    /// walls and spheres it holds; shadow rays toward the light are blocked
+    /// exactly when the general test says so, where the scene fits.
+    #[test]
+    fn answers_exactly_as_the_general_loops() {
+        let mut rng = Rng::new(9, 8, 7, 6, 5);
+        let mut shadow_rays = (0, 0);
+        for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (6, 4), (8, 3), (8, 4)] {
+            let (params, geometry) = scene(walls, spheres, LIGHT);
+            let small = SmallScene::new(&params, &geometry);
+            let shadow_walls = ShadowWalls::new(&params, &geometry);
+            let fits = SmallScene::fits(&params, &geometry);
+            let mut kinds = [0u32; 4];
+            for i in 0..4000 {
+                let mut r = || rng.next_f32();
+                let (origin, skip) = if i % 2 == 0 || walls == 0 {
+                    (Vec3::new(2.0 * r() - 1.0, 2.0 * r(), 2.0 * r() - 1.0), u32::MAX)
+                } else {
+                    let k = i as u32 % walls as u32;
+                    let w = &geometry.walls[k as usize];
+                    (w.corner + w.edge_u * r() + w.edge_v * r(), k)
+                };
+                let z = 1.0 - 2.0 * r();
+                let phi = 2.0 * crate::sampling::PI * r();
+                let s = (1.0 - z * z).max(0.0).sqrt();
+                let ray = Ray { origin, dir: Vec3::new(s * phi.cos(), s * phi.sin(), z) };
+                let want = closest_hit(&ray, &params, &geometry, skip, f32::MAX);
+                let got = small.closest_hit(&ray, &params, skip, f32::MAX);
+                assert_eq!((got.t, got.kind, got.index), (want.t, want.kind, want.index), "{walls} walls, ray {i}");
+                kinds[want.kind as usize] += 1;
+                if fits {
+                    let (dir, dist) = light_cone(&params.light, origin).sample(r(), r());
+                    let shadow = Ray { origin, dir };
+                    let want = geometry.occluded(&shadow, &params, &shadow_walls, skip, dist);
+                    assert_eq!(small.occluded(&shadow, &params, &shadow_walls, skip, dist), want, "shadow ray {i}");
+                    shadow_rays = (shadow_rays.0 + 1, shadow_rays.1 + want as u32);
+                }
+            }
+            // Every kind of hit the scene has was met.
+            assert!(kinds[HitKind::Light as usize] > 0 && (walls == 0 || kinds[HitKind::Wall as usize] > 0));
+            assert!(spheres == 0 || kinds[HitKind::Sphere as usize] > 0, "{kinds:?}");
+        }
+        // Some shadow rays were blocked, most not.
+        assert!(shadow_rays.1 > 100 && shadow_rays.1 < shadow_rays.0 / 2, "{shadow_rays:?}");
+    }
+}
