@@ -666,7 +666,15 @@ fn defaults_section(points: &[bench::Point]) -> String {
          measured by this bench: on the CPU at 256x256 and 64 spp, direct light alone, `render --max-bounces 1`, \
          has relMSE 3.5e-5 against an 8192-spp render of its own, and all 5 bounces 1.6e-3 against the \
          reference above; `pathtracer compare` gives both.)\n\
-         - Workgroup shape: 8x8 stays the default. The throughput table times 16x4, 32x2 and 4x4 on the \
+         - Trace kernel: the small-scene kernel on CPU adapters (lavapipe), for scenes it holds (at most 8 \
+         walls and 4 spheres, and no wall that can block a shadow ray: the default scene is one); the general \
+         kernel on GPUs and for other scenes. Both make the same image, bit for bit on lavapipe. The throughput \
+         table times both at 1920x1080, 64 spp/frame: lavapipe reads every uniform value of the general kernel \
+         as a gather, lane by lane, and runs loop bodies that have nothing to do (docs/ARCHITECTURE.md). GPUs \
+         keep the general kernel, with which the H100 figures were measured, until a run there shows the other \
+         ahead.\n\
+         - Workgroup shape: 8x8 stays the default. The throughput table times 8x8, 16x4, 32x2 and 4x4 of the \
+         general kernel (the only one that comes in every shape) on the \
          512x512 configuration; on lavapipe the shape only changes how invocations are batched into its \
          8-wide SIMD (4 wide rows leave half of each vector empty). On an H100 (PERFORMANCE-H100.md) 8x8, \
          16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \

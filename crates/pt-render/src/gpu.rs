@@ -402,7 +402,7 @@ impl GpuRenderer {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
-        let kernel = if ctx.is_software() { TraceKernel::SmallScene } else { TraceKernel::General };
+        let kernel = Self::default_trace_kernel(ctx);
         let mut renderer = Self {
             device,
             queue: ctx.queue.clone(),
@@ -523,6 +523,12 @@ impl GpuRenderer {
         self.accumulate = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry);
         self.trace_shape = (w, h);
         self.accumulate_small = None;
+    }
+
+    /// The trace kernel a renderer on `ctx` starts with: the small-scene
+    /// kernel on CPU adapters, the general one on GPUs.
+    pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
+        if ctx.is_software() { TraceKernel::SmallScene } else { TraceKernel::General }
     }
 
     /// Chooses the form of the trace kernel (compiled now if need be; the
