@@ -196,29 +196,35 @@ fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) 
     (used, means(&r.read_accum(ctx).unwrap()))
 }
 
-/// The small-scene kernel (lavapipe's default) renders what the general
+/// Both small-scene kernels (lavapipe's default) render what the general
 /// kernel renders, seed for seed: the same tests in the same order on a
-/// copy of the same numbers. On lavapipe that is bit for bit; another
-/// driver may fuse multiply-adds differently in each, so elsewhere all but
-/// a few pixels (paths that diverge) must agree to 1e-4.
+/// copy of the same numbers. The default scene runs on the 5-wall,
+/// 2-sphere kernel, the scene with a third sphere on the 8-wall, 4-sphere
+/// one. On lavapipe that is bit for bit; another driver may fuse
+/// multiply-adds differently in each, so elsewhere all but a few pixels
+/// (paths that diverge) must agree to 1e-4.
 #[test]
-fn small_scene_kernel_renders_what_the_general_kernel_renders() {
-    let scene = Scene::default_scene();
+fn small_scene_kernels_render_what_the_general_kernel_renders() {
     let ctx = gpu();
-    let (used, general) = render_with(&ctx, &scene, TraceKernel::General);
-    assert_eq!(used, TraceKernel::General);
-    let (used, small) = render_with(&ctx, &scene, TraceKernel::SmallScene);
-    assert_eq!(used, TraceKernel::SmallScene, "the default scene fits");
-    assert!(general.iter().any(|p| p[0] > 0.0), "a black image proves nothing");
-    if ctx.is_software() {
-        assert_eq!(small, general);
-    } else {
-        let close = small
-            .iter()
-            .zip(&general)
-            .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4 * (1.0 + b[k].abs())))
-            .count();
-        assert!(close * 100 >= general.len() * 98, "only {close} of {} pixels match", general.len());
+    let mut three_spheres = Scene::default_scene();
+    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
+    three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    for scene in [Scene::default_scene(), three_spheres] {
+        let (used, general) = render_with(&ctx, &scene, TraceKernel::General);
+        assert_eq!(used, TraceKernel::General);
+        let (used, small) = render_with(&ctx, &scene, TraceKernel::SmallScene);
+        assert_eq!(used, TraceKernel::SmallScene, "the scene fits");
+        assert!(general.iter().any(|p| p[0] > 0.0), "a black image proves nothing");
+        if ctx.is_software() {
+            assert_eq!(small, general);
+        } else {
+            let close = small
+                .iter()
+                .zip(&general)
+                .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4 * (1.0 + b[k].abs())))
+                .count();
+            assert!(close * 100 >= general.len() * 98, "only {close} of {} pixels match", general.len());
+        }
     }
 }
 

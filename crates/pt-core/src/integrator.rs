@@ -489,10 +489,15 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 }
 
 /// [`render_pixel`] on a copy of the scene read at constant indices
-/// ([`SmallScene`]), for a scene that [`SmallScene::fits`]: the same
-/// samples, faster on lavapipe.
-pub fn render_pixel_small(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
-    pixel(x, y, params, geometry, &SmallScene::new(params, geometry), &mut NoRayCount)
+/// ([`SmallScene`] of capacity `W` walls and `S` spheres), for a scene that
+/// [`SmallScene::fits`]: the same samples, faster on lavapipe.
+pub fn render_pixel_small<const W: u32, const S: u32>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    geometry: &Geometry,
+) -> PixelSamples {
+    pixel(x, y, params, geometry, &SmallScene::<W, S>::new(params, geometry), &mut NoRayCount)
 }
 
 /// Rays traced by the samples of pixel (`x`, `y`) in one frame: what

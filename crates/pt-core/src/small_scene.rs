@@ -15,11 +15,12 @@
 //!   three wall tests per shadow ray.
 //!
 //! Here the walls and spheres are copied once per pixel and frame, and the
-//! tests are unrolled over the copy's fixed capacity: no gathers, no empty
-//! loops. The price is a test per unused slot, masked off, and the scene
-//! must fit ([`SmallScene::fits`]); the renderer picks this form where both
-//! hold and the adapter is a CPU, and the general one elsewhere
-//! (docs/ARCHITECTURE.md has the measured figures).
+//! tests are unrolled over the copy's capacity: no gathers, no empty loops.
+//! The price is a test per unused slot, masked off (2 to 3% of the time
+//! each), and the scene must fit ([`SmallScene::fits`]): the kernel comes
+//! in the capacities of [`SMALL_SCENE_SIZES`], and the renderer picks the
+//! smallest that holds the scene where the adapter is a CPU, the general
+//! form elsewhere (docs/ARCHITECTURE.md has the measured figures).
 
 use crate::geometry::Geometry;
 use crate::integrator::{Hit, HitKind, Objects, ShadowWalls};
@@ -28,11 +29,15 @@ use crate::ray::Ray;
 use crate::sphere::{Sphere, intersect_sphere};
 use crate::wall::{Wall, intersect_wall};
 
-/// Walls a small scene holds at most: a room of six, and two to spare.
-pub const SMALL_WALLS: u32 = 8;
+/// The capacities (walls, spheres besides the light) the kernel has a
+/// small-scene entry point for, smallest first: the default scene's five
+/// walls and two spheres, and a closed room with two walls and two spheres
+/// to spare.
+pub const SMALL_SCENE_SIZES: [(u32, u32); 2] = [(5, 2), (8, 4)];
 
-/// Spheres (besides the light) a small scene holds at most.
-pub const SMALL_SPHERES: u32 = 4;
+/// The largest capacity, which the copy is made for.
+const MAX_WALLS: u32 = 8;
+const MAX_SPHERES: u32 = 4;
 
 /// Calls `f(0)`, `f(1)`, ..., `f(N - 1)` (N at most 8), each with a literal
 /// index: once inlined, every read of the copy has a constant offset, and
@@ -66,46 +71,51 @@ fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
     }
 }
 
-/// The first [`SMALL_WALLS`] walls and [`SMALL_SPHERES`] spheres of a
-/// scene, with the counts in use. Built once per pixel and frame.
-pub struct SmallScene {
-    walls: [Wall; SMALL_WALLS as usize],
-    spheres: [Sphere; SMALL_SPHERES as usize],
+/// The first `W` walls and `S` spheres of a scene (`W` at most 8, `S` at
+/// most 4), with the counts in use. Built once per pixel and frame.
+pub struct SmallScene<const W: u32, const S: u32> {
+    /// Slots past `W` and `S` are never read, and the compiler drops them.
+    walls: [Wall; MAX_WALLS as usize],
+    spheres: [Sphere; MAX_SPHERES as usize],
     wall_count: u32,
     sphere_count: u32,
 }
 
-impl SmallScene {
-    /// Whether this form renders the scene exactly as the general one: it
-    /// holds every wall and sphere, and no wall can block a shadow ray
-    /// (which is what a closed room with the light inside gives), so that
-    /// shadow rays test spheres only.
+/// Whether a small-scene kernel of capacity `walls` and `spheres` renders
+/// the scene exactly as the general one: it holds every wall and sphere,
+/// and no wall can block a shadow ray (which is what a closed room with the
+/// light inside gives), so that shadow rays test spheres only.
+pub fn fits(params: &FrameParams, geometry: &Geometry, (walls, spheres): (u32, u32)) -> bool {
+    params.wall_count <= walls && params.sphere_count <= spheres && ShadowWalls::new(params, geometry).is_empty()
+}
+
+impl<const W: u32, const S: u32> SmallScene<W, S> {
+    /// Whether this capacity holds the scene: [`fits`].
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
-        params.wall_count <= SMALL_WALLS
-            && params.sphere_count <= SMALL_SPHERES
-            && ShadowWalls::new(params, geometry).is_empty()
+        fits(params, geometry, (W, S))
     }
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
     /// capacity are clamped: the caller checks [`SmallScene::fits`].
     pub fn new(params: &FrameParams, geometry: &Geometry) -> Self {
+        const { assert!(W <= MAX_WALLS && S <= MAX_SPHERES) };
         let w = &geometry.walls;
         let s = &geometry.spheres;
         Self {
             walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
             spheres: [s[0], s[1], s[2], s[3]],
-            wall_count: params.wall_count.min(SMALL_WALLS),
-            sphere_count: params.sphere_count.min(SMALL_SPHERES),
+            wall_count: params.wall_count.min(W),
+            sphere_count: params.sphere_count.min(S),
         }
     }
 }
 
-impl Objects for SmallScene {
+impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
     /// The same tests as [`crate::integrator::closest_hit`], in the same
     /// order, on the copy.
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
         let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
-        unrolled::<SMALL_WALLS>(|i| {
+        unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
                 let t = intersect_wall(&self.walls[i as usize], ray, 0.0, hit.t);
                 if t < hit.t {
@@ -113,7 +123,7 @@ impl Objects for SmallScene {
                 }
             }
         });
-        unrolled::<SMALL_SPHERES>(|i| {
+        unrolled::<S>(|i| {
             if i < self.sphere_count {
                 let s = &self.spheres[i as usize];
                 let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
@@ -133,7 +143,7 @@ impl Objects for SmallScene {
     /// shadow ray.
     fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, _skip_wall: u32, t_max: f32) -> bool {
         let mut blocked = false;
-        unrolled::<SMALL_SPHERES>(|i| {
+        unrolled::<S>(|i| {
             let s = &self.spheres[i as usize];
             blocked |= i < self.sphere_count && intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max;
         });
@@ -186,18 +196,22 @@ mod tests {
     fn fits_a_room_with_the_light_inside_and_nothing_more() {
         let fits = |walls, spheres, light| {
             let (params, geometry) = scene(walls, spheres, light);
-            SmallScene::fits(&params, &geometry)
+            SmallScene::<8, 4>::fits(&params, &geometry)
         };
         assert!(fits(5, 2, LIGHT), "the default scene");
         assert!(fits(6, 4, LIGHT), "a closed room, four spheres");
         assert!(!fits(7, 2, LIGHT), "a panel inside the room can shadow the light");
         assert!(!fits(5, 2, Vec3::new(0.0, 1.0, -1.6)), "the back wall is between the light and the room");
         let (mut params, geometry) = scene(5, 2, LIGHT);
-        params.sphere_count = SMALL_SPHERES + 1;
-        assert!(!SmallScene::fits(&params, &geometry));
+        assert!(SmallScene::<5, 2>::fits(&params, &geometry));
+        params.sphere_count = 3;
+        assert!(!SmallScene::<5, 2>::fits(&params, &geometry));
+        assert!(SmallScene::<8, 4>::fits(&params, &geometry));
+        params.sphere_count = 5;
+        assert!(!SmallScene::<8, 4>::fits(&params, &geometry));
         params.sphere_count = 2;
-        params.wall_count = SMALL_WALLS + 1;
-        assert!(!SmallScene::fits(&params, &geometry));
+        params.wall_count = 9;
+        assert!(!SmallScene::<8, 4>::fits(&params, &geometry));
     }
 
     /// Rays from random points in the room in random directions, and from
@@ -211,9 +225,13 @@ mod tests {
         let mut shadow_rays = (0, 0);
         for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (6, 4), (8, 3), (8, 4)] {
             let (params, geometry) = scene(walls, spheres, LIGHT);
-            let small = SmallScene::new(&params, &geometry);
+            // The smallest capacity that holds the counts, as the renderer picks.
+            let (small, fits): (&dyn Objects, bool) = if walls <= 5 && spheres <= 2 {
+                (&SmallScene::<5, 2>::new(&params, &geometry), SmallScene::<5, 2>::fits(&params, &geometry))
+            } else {
+                (&SmallScene::<8, 4>::new(&params, &geometry), SmallScene::<8, 4>::fits(&params, &geometry))
+            };
             let shadow_walls = ShadowWalls::new(&params, &geometry);
-            let fits = SmallScene::fits(&params, &geometry);
             let mut kinds = [0u32; 4];
             for i in 0..4000 {
                 let mut r = || rng.next_f32();

@@ -3,7 +3,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use pt_core::small_scene::SmallScene;
+use pt_core::small_scene::{SMALL_SCENE_SIZES, fits};
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
@@ -65,6 +65,9 @@ pub struct GpuContext {
     failure: Arc<Mutex<Option<String>>>,
     /// The kernel's pipelines, compiled on first use.
     kernel: std::sync::OnceLock<Kernel>,
+    /// The small-scene kernels, one per entry of `SMALL_SCENE_SIZES`,
+    /// compiled on first use.
+    small_kernels: std::sync::OnceLock<Vec<wgpu::ComputePipeline>>,
 }
 
 /// Preference among adapter types: a real GPU first, the software driver
@@ -122,11 +125,30 @@ impl GpuContext {
                 f.get_or_insert(e.to_string());
             }
         }));
-        Ok(Self { device, queue, adapter_info, adapter, failure, kernel: Default::default() })
+        Ok(Self {
+            device,
+            queue,
+            adapter_info,
+            adapter,
+            failure,
+            kernel: Default::default(),
+            small_kernels: Default::default(),
+        })
     }
 
     fn kernel(&self) -> &Kernel {
         self.kernel.get_or_init(|| Kernel::new(&self.device))
+    }
+
+    fn small_kernels(&self) -> &[wgpu::ComputePipeline] {
+        self.small_kernels.get_or_init(|| {
+            let k = self.kernel();
+            let entry = |(w, s): (u32, u32)| format!("accumulate_small_{w}_{s}");
+            SMALL_SCENE_SIZES
+                .iter()
+                .map(|&size| compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, &entry(size)))
+                .collect()
+        })
     }
 
     /// The adapter (surface capabilities are asked of it).
@@ -204,9 +226,9 @@ pub enum TraceKernel {
     /// `accumulate` (and its other workgroup shapes): the uniform block read
     /// in loops, for any scene. The default on GPUs.
     General,
-    /// `accumulate_small`: a copy of a small scene read at constant indices
-    /// (`pt_core::small_scene`), for scenes that `SmallScene::fits`; frames
-    /// of other scenes use `General`. The default on CPU adapters (lavapipe),
+    /// `accumulate_small_*`: a copy of a small scene read at constant
+    /// indices (`pt_core::small_scene`), in the smallest capacity that holds
+    /// the scene; frames of scenes that fit none use `General`. The default on CPU adapters (lavapipe),
     /// where it measured faster (docs/ARCHITECTURE.md).
     SmallScene,
 }
@@ -302,10 +324,11 @@ pub struct GpuRenderer {
     trace_group: wgpu::BindGroup,
     display_group: wgpu::BindGroup,
     params: FrameParams,
-    /// The geometry block's contents, for [`SmallScene::fits`].
+    /// The geometry block's contents, for `small_scene::fits`.
     geometry: Box<Geometry>,
-    /// `accumulate_small`, where the small-scene kernel is chosen.
-    accumulate_small: Option<wgpu::ComputePipeline>,
+    /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES`),
+    /// where they are chosen.
+    accumulate_small: Option<Vec<wgpu::ComputePipeline>>,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
@@ -537,22 +560,25 @@ impl GpuRenderer {
     pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
         if kernel == TraceKernel::SmallScene {
             self.set_workgroup_shape(ctx, 0);
-            let k = ctx.kernel();
-            let small = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, "accumulate_small");
-            self.accumulate_small = Some(small);
+            self.accumulate_small = Some(ctx.small_kernels().to_vec());
         } else {
             self.accumulate_small = None;
         }
     }
 
+    /// The small-scene pipeline the next frame runs, if any: where the
+    /// small-scene kernel is chosen, the smallest capacity that holds the
+    /// scene.
+    fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
+        let pipelines = self.accumulate_small.as_ref()?;
+        let size = SMALL_SCENE_SIZES.iter().position(|&size| fits(&self.params, &self.geometry, size))?;
+        pipelines.get(size)
+    }
+
     /// The kernel the next frame runs: the small-scene kernel where it is
     /// chosen and the scene fits it, else the general one.
     pub fn trace_kernel(&self) -> TraceKernel {
-        if self.accumulate_small.is_some() && SmallScene::fits(&self.params, &self.geometry) {
-            TraceKernel::SmallScene
-        } else {
-            TraceKernel::General
-        }
+        if self.small_pipeline().is_some() { TraceKernel::SmallScene } else { TraceKernel::General }
     }
 
     /// Submits one frame of `samples` samples per pixel. Nothing waits: the
@@ -597,10 +623,7 @@ impl GpuRenderer {
         let (x, y) = (self.params.width.div_ceil(self.trace_shape.0), self.params.height.div_ceil(self.trace_shape.1));
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
-        let pipeline = match (&self.accumulate_small, self.trace_kernel()) {
-            (Some(small), TraceKernel::SmallScene) => small,
-            _ => &self.accumulate,
-        };
+        let pipeline = self.small_pipeline().unwrap_or(&self.accumulate);
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.trace_group, &[]);
         pass.dispatch_workgroups(x, y, 1);

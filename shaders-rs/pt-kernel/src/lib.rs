@@ -8,35 +8,28 @@
 #![cfg_attr(target_arch = "spirv", no_std)]
 
 use pt_core::glam::{UVec3, Vec2, Vec4};
-use pt_core::{AccumPixel, FrameParams, Geometry, integrator, tonemap};
+use pt_core::{AccumPixel, FrameParams, Geometry, PixelSamples, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
 
 /// Adds one frame of `samples_per_frame` samples to pixel `id`'s sum, and
 /// counts the non-finite samples it discarded. The `accumulate*` entry
 /// points differ only in their workgroup shape (`pathtracer bench`
-/// compares them); `accumulate` (8 x 8) is the default. `SMALL`: trace a
-/// copy of the scene ([`integrator::render_pixel_small`]), for
-/// `accumulate_small`.
-fn accumulate_pixel<const SMALL: bool>(
+/// compares them); `accumulate` (8 x 8) is the default. The
+/// `accumulate_small_*` entry points trace a copy of a small scene
+/// (`render` is then [`small`]).
+fn accumulate_pixel(
     id: UVec3,
     params: &FrameParams,
     geometry: &Geometry,
     accum: &mut [AccumPixel],
     non_finite: &mut [u32],
+    render: impl Fn(u32, u32, &FrameParams, &Geometry) -> PixelSamples,
 ) {
     if id.x >= params.width || id.y >= params.height {
         return;
     }
-    let samples = if SMALL {
-        // The parameters in the invocation's own memory too: lavapipe
-        // would otherwise gather each of them from the uniform block at
-        // every read.
-        let params = *params;
-        integrator::render_pixel_small(id.x, id.y, &params, geometry)
-    } else {
-        integrator::render_pixel(id.x, id.y, params, geometry)
-    };
+    let samples = render(id.x, id.y, params, geometry);
     // width != 0 always; the driver cannot know it (see `kahan_add`).
     accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
@@ -53,11 +46,20 @@ fn accumulate_pixel<const SMALL: bool>(
     }
 }
 
+/// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
+/// `S` spheres, with the parameters copied into the invocation's own memory
+/// too: lavapipe would otherwise gather each of them from the uniform block
+/// at every read.
+fn small<const W: u32, const S: u32>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
+    let params = *params;
+    integrator::render_pixel_small::<W, S>(x, y, &params, geometry)
+}
+
 macro_rules! accumulate_entry {
     ($name:ident, $x:literal, $y:literal) => {
-        accumulate_entry!($name, $x, $y, false);
+        accumulate_entry!($name, $x, $y, integrator::render_pixel);
     };
-    ($name:ident, $x:literal, $y:literal, $small:literal) => {
+    ($name:ident, $x:literal, $y:literal, $render:expr) => {
         /// [`accumulate_pixel`] in workgroups of this shape.
         #[spirv(compute(threads($x, $y)))]
         pub fn $name(
@@ -67,7 +69,7 @@ macro_rules! accumulate_entry {
             #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
         ) {
-            accumulate_pixel::<$small>(id, params, geometry, accum, non_finite);
+            accumulate_pixel(id, params, geometry, accum, non_finite, $render);
         }
     };
 }
@@ -76,8 +78,10 @@ accumulate_entry!(accumulate, 8, 8);
 accumulate_entry!(accumulate_16x4, 16, 4);
 accumulate_entry!(accumulate_32x2, 32, 2);
 accumulate_entry!(accumulate_4x4, 4, 4);
-// For scenes that `SmallScene::fits`: the renderer's choice on lavapipe.
-accumulate_entry!(accumulate_small, 8, 8, true);
+// For scenes that `SmallScene::fits`, one per capacity in
+// `small_scene::SMALL_SCENE_SIZES`: the renderer's choice on lavapipe.
+accumulate_entry!(accumulate_small_5_2, 8, 8, small::<5, 2>);
+accumulate_entry!(accumulate_small_8_4, 8, 8, small::<8, 4>);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
 #[spirv(compute(threads(8, 8)))]
