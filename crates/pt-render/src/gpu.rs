@@ -538,12 +538,17 @@ impl GpuRenderer {
     }
 
     /// Traces with the general kernel's entry point of
-    /// `WORKGROUP_SHAPES[shape]` (compiled now; benchmarks compare the
-    /// shapes).
+    /// `WORKGROUP_SHAPES[shape]` (compiled now unless it is the default;
+    /// benchmarks compare the shapes).
     pub fn set_workgroup_shape(&mut self, ctx: &GpuContext, shape: usize) {
         let (entry, w, h) = WORKGROUP_SHAPES[shape];
         let k = ctx.kernel();
-        self.accumulate = compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry);
+        // The default shape is compiled already.
+        self.accumulate = if shape == 0 {
+            k.accumulate.clone()
+        } else {
+            compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry)
+        };
         self.trace_shape = (w, h);
         self.accumulate_small = None;
     }
