@@ -45,30 +45,10 @@ const MAX_SPHERES: u32 = 4;
 #[inline(always)]
 fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
     const { assert!(N <= 8) };
-    if N > 0 {
-        f(0);
+    macro_rules! calls {
+        ($($k:literal)*) => { $( if N > $k { f($k); } )* };
     }
-    if N > 1 {
-        f(1);
-    }
-    if N > 2 {
-        f(2);
-    }
-    if N > 3 {
-        f(3);
-    }
-    if N > 4 {
-        f(4);
-    }
-    if N > 5 {
-        f(5);
-    }
-    if N > 6 {
-        f(6);
-    }
-    if N > 7 {
-        f(7);
-    }
+    calls!(0 1 2 3 4 5 6 7);
 }
 
 /// The first `W` walls and `S` spheres of a scene (`W` at most 8, `S` at
