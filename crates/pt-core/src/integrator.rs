@@ -5,15 +5,15 @@ use spirv_std::glam::{Vec2, Vec3};
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
-use crate::light::{GlowLobe, LightCone, light_cone};
+use crate::light::{GlowLobe, LightCone, SphereLight, light_cone};
 use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
 use crate::sampling::{PI, about_axis, cosine_polar, power_heuristic};
 use crate::small_scene::SmallScene;
-use crate::sphere::{intersect_sphere, sphere_hit_point};
-use crate::wall::intersect_wall;
+use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point};
+use crate::wall::{Wall, intersect_wall};
 
 /// What a ray hit. `u32`-sized: SPIR-V has no 8-bit integers without the
 /// Int8 capability.
@@ -41,6 +41,50 @@ pub struct Hit {
     pub index: u32,
 }
 
+/// The steps of a closest-hit search, shared by the general loops
+/// ([`closest_hit`]) and the small-scene copy
+/// ([`crate::small_scene::SmallScene`]): each keeps an object that the ray
+/// meets before the hit so far.
+impl Hit {
+    /// Nothing found in (0, `t_max`) yet.
+    pub fn none(t_max: f32) -> Self {
+        Self { t: t_max, kind: HitKind::Nothing, index: 0 }
+    }
+
+    /// Tests wall number `index`.
+    #[inline]
+    pub fn test_wall(&mut self, index: u32, wall: &Wall, ray: &Ray) {
+        let t = intersect_wall(wall, ray, 0.0, self.t);
+        if t < self.t {
+            *self = Self { t, kind: HitKind::Wall, index };
+        }
+    }
+
+    /// Tests sphere number `index`.
+    #[inline]
+    pub fn test_sphere(&mut self, index: u32, sphere: &Sphere, ray: &Ray) {
+        let t = intersect_sphere(sphere.center, sphere.radius, ray, 0.0, self.t);
+        if t < self.t {
+            *self = Self { t, kind: HitKind::Sphere, index };
+        }
+    }
+
+    /// Tests the light.
+    #[inline]
+    pub fn test_light(&mut self, light: &SphereLight, ray: &Ray) {
+        let t = intersect_sphere(light.center, light.radius, ray, 0.0, self.t);
+        if t < self.t {
+            *self = Self { t, kind: HitKind::Light, index: 0 };
+        }
+    }
+}
+
+/// Whether `sphere` blocks the shadow ray in (0, `t_max`).
+#[inline]
+pub fn sphere_blocks(sphere: &Sphere, ray: &Ray, t_max: f32) -> bool {
+    intersect_sphere(sphere.center, sphere.radius, ray, 0.0, t_max) < t_max
+}
+
 /// "No limit" for ray parameters. Not `f32::INFINITY`: naga rejects an
 /// infinite literal in a SPIR-V module.
 pub const T_FAR: f32 = f32::MAX;
@@ -63,31 +107,21 @@ fn counts(params: &FrameParams) -> (u32, u32) {
 /// again by a ray that leaves it, so testing it could only find rounding
 /// noise.
 pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> Hit {
-    let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
+    let mut hit = Hit::none(t_max);
     let (wall_count, sphere_count) = counts(params);
     let mut i = 0;
     while i < wall_count {
         if i != skip_wall {
-            let t = intersect_wall(&geometry.walls[i as usize], ray, 0.0, hit.t);
-            if t < hit.t {
-                hit = Hit { t, kind: HitKind::Wall, index: i };
-            }
+            hit.test_wall(i, &geometry.walls[i as usize], ray);
         }
         i += 1;
     }
     let mut i = 0;
     while i < sphere_count {
-        let s = geometry.spheres[i as usize];
-        let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
-        if t < hit.t {
-            hit = Hit { t, kind: HitKind::Sphere, index: i };
-        }
+        hit.test_sphere(i, &geometry.spheres[i as usize], ray);
         i += 1;
     }
-    let t = intersect_sphere(params.light.center, params.light.radius, ray, 0.0, hit.t);
-    if t < hit.t {
-        hit = Hit { t, kind: HitKind::Light, index: 0 };
-    }
+    hit.test_light(&params.light, ray);
     hit
 }
 
@@ -183,8 +217,7 @@ pub fn occluded(
     let (_, sphere_count) = counts(params);
     let mut i = 0;
     while i < sphere_count {
-        let s = geometry.spheres[i as usize];
-        if intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max {
+        if sphere_blocks(&geometry.spheres[i as usize], ray, t_max) {
             return true;
         }
         i += 1;

@@ -23,11 +23,11 @@
 //! form elsewhere (docs/ARCHITECTURE.md has the measured figures).
 
 use crate::geometry::Geometry;
-use crate::integrator::{Hit, HitKind, Objects, ShadowWalls};
+use crate::integrator::{Hit, Objects, ShadowWalls, sphere_blocks};
 use crate::params::FrameParams;
 use crate::ray::Ray;
-use crate::sphere::{Sphere, intersect_sphere};
-use crate::wall::{Wall, intersect_wall};
+use crate::sphere::Sphere;
+use crate::wall::Wall;
 
 /// The capacities (walls, spheres besides the light) the kernel has a
 /// small-scene entry point for, smallest first: the default scene's five
@@ -65,8 +65,22 @@ pub struct SmallScene<const W: u32, const S: u32> {
 /// the scene exactly as the general one: it holds every wall and sphere,
 /// and no wall can block a shadow ray (which is what a closed room with the
 /// light inside gives), so that shadow rays test spheres only.
-pub fn fits(params: &FrameParams, geometry: &Geometry, (walls, spheres): (u32, u32)) -> bool {
-    params.wall_count <= walls && params.sphere_count <= spheres && ShadowWalls::new(params, geometry).is_empty()
+pub fn fits(params: &FrameParams, geometry: &Geometry, size: (u32, u32)) -> bool {
+    holds(params, size) && ShadowWalls::new(params, geometry).is_empty()
+}
+
+/// Whether capacity `(walls, spheres)` holds the scene's counts.
+fn holds(params: &FrameParams, (walls, spheres): (u32, u32)) -> bool {
+    params.wall_count <= walls && params.sphere_count <= spheres
+}
+
+/// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that
+/// [`fits`] the scene, if any: what the renderer runs.
+pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> {
+    if !ShadowWalls::new(params, geometry).is_empty() {
+        return None;
+    }
+    SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size))
 }
 
 impl<const W: u32, const S: u32> SmallScene<W, S> {
@@ -94,28 +108,18 @@ impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
     /// The same tests as [`crate::integrator::closest_hit`], in the same
     /// order, on the copy.
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
-        let mut hit = Hit { t: t_max, kind: HitKind::Nothing, index: 0 };
+        let mut hit = Hit::none(t_max);
         unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
-                let t = intersect_wall(&self.walls[i as usize], ray, 0.0, hit.t);
-                if t < hit.t {
-                    hit = Hit { t, kind: HitKind::Wall, index: i };
-                }
+                hit.test_wall(i, &self.walls[i as usize], ray);
             }
         });
         unrolled::<S>(|i| {
             if i < self.sphere_count {
-                let s = &self.spheres[i as usize];
-                let t = intersect_sphere(s.center, s.radius, ray, 0.0, hit.t);
-                if t < hit.t {
-                    hit = Hit { t, kind: HitKind::Sphere, index: i };
-                }
+                hit.test_sphere(i, &self.spheres[i as usize], ray);
             }
         });
-        let t = intersect_sphere(params.light.center, params.light.radius, ray, 0.0, hit.t);
-        if t < hit.t {
-            hit = Hit { t, kind: HitKind::Light, index: 0 };
-        }
+        hit.test_light(&params.light, ray);
         hit
     }
 
@@ -123,10 +127,7 @@ impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
     /// shadow ray.
     fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, _skip_wall: u32, t_max: f32) -> bool {
         let mut blocked = false;
-        unrolled::<S>(|i| {
-            let s = &self.spheres[i as usize];
-            blocked |= i < self.sphere_count && intersect_sphere(s.center, s.radius, ray, 0.0, t_max) < t_max;
-        });
+        unrolled::<S>(|i| blocked |= i < self.sphere_count && sphere_blocks(&self.spheres[i as usize], ray, t_max));
         blocked
     }
 }
@@ -134,7 +135,7 @@ impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::closest_hit;
+    use crate::integrator::{HitKind, closest_hit};
     use crate::light::{SphereLight, light_cone};
     use crate::rng::Rng;
     use spirv_std::glam::Vec3;
@@ -192,6 +193,16 @@ mod tests {
         params.sphere_count = 2;
         params.wall_count = 9;
         assert!(!SmallScene::<8, 4>::fits(&params, &geometry));
+        // The renderer's choice: the smallest capacity that fits.
+        let choice = |walls, spheres, light| {
+            let (params, geometry) = scene(walls, spheres, light);
+            smallest_fit(&params, &geometry).map(|i| SMALL_SCENE_SIZES[i])
+        };
+        assert_eq!(choice(5, 2, LIGHT), Some((5, 2)));
+        assert_eq!(choice(5, 3, LIGHT), Some((8, 4)));
+        assert_eq!(choice(6, 0, LIGHT), Some((8, 4)));
+        assert_eq!(choice(7, 2, LIGHT), None);
+        assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
     }
 
     /// Rays from random points in the room in random directions, and from

@@ -3,7 +3,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use pt_core::small_scene::{SMALL_SCENE_SIZES, fits};
+use pt_core::small_scene::{SMALL_SCENE_SIZES, smallest_fit};
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
@@ -324,11 +324,14 @@ pub struct GpuRenderer {
     trace_group: wgpu::BindGroup,
     display_group: wgpu::BindGroup,
     params: FrameParams,
-    /// The geometry block's contents, for `small_scene::fits`.
+    /// The geometry block's contents, for `small_scene::smallest_fit`.
     geometry: Box<Geometry>,
     /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES`),
     /// where they are chosen.
     accumulate_small: Option<Vec<wgpu::ComputePipeline>>,
+    /// `smallest_fit` of the current scene and light: worked out when they
+    /// change, not every frame.
+    small_fit: Option<usize>,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
@@ -441,6 +444,7 @@ impl GpuRenderer {
             trace_group,
             display_group,
             params,
+            small_fit: smallest_fit(&params, &geometry),
             geometry,
             accumulate_small: None,
             next_frame: 0,
@@ -492,6 +496,7 @@ impl GpuRenderer {
             self.samples_done = 0;
         }
         self.params = params;
+        self.small_fit = smallest_fit(&self.params, &self.geometry);
         Ok(())
     }
 
@@ -502,6 +507,7 @@ impl GpuRenderer {
         self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&*self.geometry));
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
+        self.small_fit = smallest_fit(&self.params, &self.geometry);
         Ok(())
     }
 
@@ -575,9 +581,7 @@ impl GpuRenderer {
     /// small-scene kernel is chosen, the smallest capacity that holds the
     /// scene.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
-        let pipelines = self.accumulate_small.as_ref()?;
-        let size = SMALL_SCENE_SIZES.iter().position(|&size| fits(&self.params, &self.geometry, size))?;
-        pipelines.get(size)
+        self.accumulate_small.as_ref()?.get(self.small_fit?)
     }
 
     /// The kernel the next frame runs: the small-scene kernel where it is
