@@ -228,8 +228,9 @@ pub enum TraceKernel {
     General,
     /// `accumulate_small_*`: a copy of a small scene read at constant
     /// indices (`pt_core::small_scene`), in the smallest capacity that holds
-    /// the scene; frames of scenes that fit none use `General`. The default on CPU adapters (lavapipe),
-    /// where it measured faster (docs/ARCHITECTURE.md).
+    /// the scene; frames of scenes that fit none use `General`. The default
+    /// on CPU adapters (lavapipe), where it measured faster
+    /// (docs/ARCHITECTURE.md).
     SmallScene,
 }
 
