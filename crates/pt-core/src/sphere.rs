@@ -38,6 +38,7 @@ impl Sphere {
 /// (f.d) d|^2`, which stays accurate for far and tiny spheres where `b^2 -
 /// c` cancels; the two roots come from the stable `q` form, so the small
 /// root is accurate for an origin on or near the surface.
+#[inline]
 pub fn intersect_sphere(center: Vec3, radius: f32, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
     let f = ray.origin - center;
     let b = -f.dot(ray.dir);

@@ -92,6 +92,7 @@ impl Wall {
 ///
 /// `t = n . (corner - o) / n . d`: subtracting the points before the dot
 /// product keeps `t` accurate when the scene sits far from the origin.
+#[inline]
 pub fn intersect_wall(wall: &Wall, ray: &Ray, t_min: f32, t_max: f32) -> f32 {
     let denom = wall.normal.dot(ray.dir);
     // Parallel (or a degenerate wall, normal zero): no hit. A ray exactly in
