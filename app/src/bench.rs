@@ -589,14 +589,19 @@ pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
     })
 }
 
-/// Each seed's time to relMSE `target` along its own curve, with the seed
-/// (seeds that do not reach it are left out).
-fn times_by_seed(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<(u32, f64)> {
+/// The seeds a strategy was rendered with on `backend`, in order.
+fn seeds(points: &[Point], backend: &str, strategy: &str) -> Vec<u32> {
     let mut seeds: Vec<u32> =
         points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.seed).collect();
     seeds.sort_unstable();
     seeds.dedup();
     seeds
+}
+
+/// Each seed's time to relMSE `target` along its own curve, with the seed
+/// (seeds that do not reach it are left out).
+fn times_by_seed(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<(u32, f64)> {
+    seeds(points, backend, strategy)
         .iter()
         .filter_map(|&seed| {
             let mut curve: Vec<&Point> =
@@ -636,11 +641,7 @@ pub struct FasterThanDefault {
 /// such a strategy when two do the same work.
 pub fn faster_than_default(points: &[Point], backend: &str, target: f64) -> Option<(u32, Vec<FasterThanDefault>)> {
     let default = times_by_seed(points, backend, STRATEGIES[0].name, target);
-    let mut seeds: Vec<u32> =
-        points.iter().filter(|p| p.backend == backend && p.strategy == STRATEGIES[0].name).map(|p| p.seed).collect();
-    seeds.sort_unstable();
-    seeds.dedup();
-    let n = seeds.len();
+    let n = seeds(points, backend, STRATEGIES[0].name).len();
     if n < 2 {
         return None;
     }
@@ -652,12 +653,9 @@ pub fn faster_than_default(points: &[Point], backend: &str, target: f64) -> Opti
                 .iter()
                 .filter_map(|&(seed, d)| times.iter().find(|&&(s, _)| s == seed).map(|&(_, t)| t / d))
                 .collect();
-            (ratios.len() == n && ratios.iter().all(|&r| r < 1.0)).then(|| FasterThanDefault {
-                name: st.name,
-                ratios: (
-                    ratios.iter().copied().fold(f64::INFINITY, f64::min),
-                    ratios.iter().copied().fold(0.0, f64::max),
-                ),
+            (ratios.len() == n && ratios.iter().all(|&r| r < 1.0)).then(|| {
+                let (_, lo, hi) = median_min_max(ratios);
+                FasterThanDefault { name: st.name, ratios: (lo, hi) }
             })
         })
         .collect();

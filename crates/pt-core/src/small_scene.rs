@@ -61,21 +61,13 @@ pub struct SmallScene<const W: u32, const S: u32> {
     sphere_count: u32,
 }
 
-/// Whether a small-scene kernel of capacity `walls` and `spheres` renders
-/// the scene exactly as the general one: it holds every wall and sphere,
-/// and no wall can block a shadow ray (which is what a closed room with the
-/// light inside gives), so that shadow rays test spheres only.
-pub fn fits(params: &FrameParams, geometry: &Geometry, size: (u32, u32)) -> bool {
-    holds(params, size) && ShadowWalls::new(params, geometry).is_empty()
-}
-
 /// Whether capacity `(walls, spheres)` holds the scene's counts.
 fn holds(params: &FrameParams, (walls, spheres): (u32, u32)) -> bool {
     params.wall_count <= walls && params.sphere_count <= spheres
 }
 
-/// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that
-/// [`fits`] the scene, if any: what the renderer runs.
+/// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that fits
+/// the scene ([`SmallScene::fits`]), if any: what the renderer runs.
 pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> {
     if !ShadowWalls::new(params, geometry).is_empty() {
         return None;
@@ -84,9 +76,12 @@ pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> 
 }
 
 impl<const W: u32, const S: u32> SmallScene<W, S> {
-    /// Whether this capacity holds the scene: [`fits`].
+    /// Whether this capacity renders the scene exactly as the general
+    /// loops: it holds every wall and sphere, and no wall can block a
+    /// shadow ray (which is what a closed room with the light inside gives),
+    /// so that shadow rays test spheres only.
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
-        fits(params, geometry, (W, S))
+        holds(params, (W, S)) && ShadowWalls::new(params, geometry).is_empty()
     }
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
