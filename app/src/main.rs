@@ -229,6 +229,7 @@ impl Default for RenderArgs {
 }
 
 fn main() {
+    quiet_vulkan_device_select();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::View(args)) => view(&args),
@@ -245,6 +246,24 @@ fn main() {
     if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
+    }
+}
+
+/// Mesa's Vulkan device-select layer asks the Wayland compositor which GPU
+/// is the default one, and libwayland prints "error: XDG_RUNTIME_DIR is
+/// invalid or not set in the environment." at every Vulkan instance when
+/// there is no session to ask: a headless machine, a container, CI. There
+/// the layer has nothing to choose by (a desktop session always sets
+/// `XDG_RUNTIME_DIR`), so it is switched off through its own variable,
+/// `NODEVICE_SELECT`, which the Vulkan loader reads; wgpu still picks the
+/// adapter by power preference. A user's own setting of either variable
+/// wins.
+fn quiet_vulkan_device_select() {
+    let unset = |name| std::env::var_os(name).is_none();
+    if unset("XDG_RUNTIME_DIR") && unset("WAYLAND_DISPLAY") && unset("NODEVICE_SELECT") {
+        // SAFETY: the first statement of `main`, before any other thread
+        // exists that could read the environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
 }
 

@@ -9,8 +9,10 @@ use wgpu::util::DeviceExt;
 
 use crate::scene::TooManyObjects;
 
-/// The kernel's SPIR-V, built by `build.rs` with rust-gpu.
-pub const KERNEL_SPV: &[u8] = include_bytes!(env!("PT_KERNEL_SPV"));
+/// The kernel's SPIR-V: the committed module `shaders-rs/compiled/pt_kernel.spv`
+/// unless `build.rs` was told to use another (`PT_KERNEL_SPV`, or the
+/// `build-kernel` feature).
+pub const KERNEL_SPV: &[u8] = include_bytes!(env!("PT_KERNEL_MODULE"));
 
 /// Errors of the GPU backend.
 #[derive(Debug, thiserror::Error)]
@@ -143,7 +145,7 @@ impl GpuContext {
     fn small_kernels(&self) -> &[wgpu::ComputePipeline] {
         self.small_kernels.get_or_init(|| {
             let k = self.kernel();
-            let entry = |(w, s): (u32, u32)| format!("accumulate_small_{w}_{s}");
+            let entry = |(w, s): (u32, u32)| format!("accumulate_small_{w}w_{s}s");
             SMALL_SCENE_SIZES
                 .iter()
                 .map(|&size| compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, &entry(size)))
@@ -246,8 +248,12 @@ impl TraceKernel {
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
 /// (entry point, width, height). The first is the default.
-pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] =
-    [("accumulate", 8, 8), ("accumulate_16x4", 16, 4), ("accumulate_32x2", 32, 2), ("accumulate_4x4", 4, 4)];
+pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] = [
+    ("accumulate", 8, 8),
+    ("accumulate_16x4_groups", 16, 4),
+    ("accumulate_32x2_groups", 32, 2),
+    ("accumulate_4x4_groups", 4, 4),
+];
 
 fn compute_pipeline(
     device: &wgpu::Device,

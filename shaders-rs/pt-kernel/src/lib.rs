@@ -74,14 +74,17 @@ macro_rules! accumulate_entry {
     };
 }
 
+// Entry point names end in a letter: naga's WGSL writer, which a browser's
+// WebGPU backend goes through, appends `_` to a name that ends in a digit,
+// and the pipeline would then not find its entry point.
 accumulate_entry!(accumulate, 8, 8);
-accumulate_entry!(accumulate_16x4, 16, 4);
-accumulate_entry!(accumulate_32x2, 32, 2);
-accumulate_entry!(accumulate_4x4, 4, 4);
+accumulate_entry!(accumulate_16x4_groups, 16, 4);
+accumulate_entry!(accumulate_32x2_groups, 32, 2);
+accumulate_entry!(accumulate_4x4_groups, 4, 4);
 // For scenes that `SmallScene::fits`, one per capacity in
 // `small_scene::SMALL_SCENE_SIZES`: the renderer's choice on lavapipe.
-accumulate_entry!(accumulate_small_5_2, 8, 8, small::<5, 2>);
-accumulate_entry!(accumulate_small_8_4, 8, 8, small::<8, 4>);
+accumulate_entry!(accumulate_small_5w_2s, 8, 8, small::<5, 2>);
+accumulate_entry!(accumulate_small_8w_4s, 8, 8, small::<8, 4>);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
 #[spirv(compute(threads(8, 8)))]

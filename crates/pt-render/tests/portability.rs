@@ -1,0 +1,100 @@
+//! The embedded kernel runs on every backend wgpu serves: wgpu reads the
+//! SPIR-V with naga and writes it out again as MSL on Metal, HLSL on DX12 and
+//! WGSL in a browser. Each entry point is translated here as wgpu would, so
+//! that a construct one of those writers rejects fails on this machine,
+//! without a Mac, a Windows machine or a browser. WGSL output is read back
+//! and validated again; MSL and HLSL have no validator short of Apple's and
+//! Microsoft's compilers, so for them the check is naga's: the module
+//! validates with that backend's capabilities and the writer accepts it.
+
+use naga::back::{hlsl, msl, wgsl};
+use naga::front::spv;
+use naga::valid::{Capabilities, ModuleInfo, ValidationFlags, Validator};
+use naga::{Module, ShaderStage};
+use pt_render::KERNEL_SPV;
+
+/// The kernel as wgpu reads it (`wgpu::ShaderSource::SpirV`'s options).
+fn kernel() -> Module {
+    let options =
+        spv::Options { adjust_coordinate_space: false, strict_capabilities: true, block_ctx_dump_prefix: None };
+    spv::parse_u8_slice(KERNEL_SPV, &options).expect("naga reads the kernel")
+}
+
+fn validate(module: &Module, capabilities: Capabilities, backend: &str) -> ModuleInfo {
+    Validator::new(ValidationFlags::all(), capabilities)
+        .validate(module)
+        .unwrap_or_else(|e| panic!("the kernel does not validate for {backend}: {e:?}"))
+}
+
+/// (stage, name) of every entry point, checked to be the full set.
+fn entry_points(module: &Module) -> Vec<(ShaderStage, String)> {
+    let eps: Vec<_> = module.entry_points.iter().map(|ep| (ep.stage, ep.name.clone())).collect();
+    // Case: the module's entry points are the ones the renderer and viewer
+    // create pipelines for; a renamed or dropped one fails here too.
+    let mut names: Vec<&str> = eps.iter().map(|(_, n)| n.as_str()).collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "accumulate",
+            "accumulate_16x4_groups",
+            "accumulate_32x2_groups",
+            "accumulate_4x4_groups",
+            "accumulate_small_5w_2s",
+            "accumulate_small_8w_4s",
+            "blit_fs",
+            "blit_vs",
+            "display"
+        ]
+    );
+    eps
+}
+
+/// Metal: MSL 2.4 (macOS 12, iOS 15), what wgpu's Metal backend targets on
+/// current systems.
+#[test]
+fn every_entry_point_translates_to_msl() {
+    let module = kernel();
+    let info = validate(&module, msl::supported_capabilities(), "MSL");
+    for (stage, name) in entry_points(&module) {
+        let options = msl::Options { lang_version: (2, 4), force_loop_bounding: false, ..Default::default() };
+        let pipeline = msl::PipelineOptions { entry_point: Some((stage, name.clone())), ..Default::default() };
+        let (source, _) = msl::write_string(&module, &info, &options, &pipeline)
+            .unwrap_or_else(|e| panic!("MSL writer rejects entry point {name}: {e:?}"));
+        assert!(source.contains(&name), "the MSL of {name} does not define it");
+    }
+}
+
+/// DX12: HLSL shader model 6.0, the lowest wgpu's DX12 backend compiles for
+/// with DXC.
+#[test]
+fn every_entry_point_translates_to_hlsl() {
+    let module = kernel();
+    let info = validate(&module, hlsl::supported_capabilities(), "HLSL");
+    for (stage, name) in entry_points(&module) {
+        let options =
+            hlsl::Options { shader_model: hlsl::ShaderModel::V6_0, force_loop_bounding: false, ..Default::default() };
+        let pipeline = hlsl::PipelineOptions { entry_point: Some((stage, name.clone())) };
+        let mut source = String::new();
+        hlsl::Writer::new(&mut source, &options, &pipeline)
+            .write(&module, &info, None)
+            .unwrap_or_else(|e| panic!("HLSL writer rejects entry point {name}: {e:?}"));
+        assert!(source.contains(&name), "the HLSL of {name} does not define it");
+    }
+}
+
+/// WebGPU: the WGSL naga writes parses again and validates with WebGPU's
+/// base capabilities (no extensions), every entry point under its own name
+/// (a browser's pipeline looks it up by that name; naga renames one that
+/// ends in a digit).
+#[test]
+fn wgsl_round_trips_with_webgpu_capabilities() {
+    let module = kernel();
+    let info = validate(&module, Capabilities::empty(), "WGSL (WebGPU)");
+    let source = wgsl::write_string(&module, &info, wgsl::WriterFlags::empty())
+        .unwrap_or_else(|e| panic!("WGSL writer rejects the kernel: {e:?}"));
+    let reparsed = naga::front::wgsl::parse_str(&source)
+        .unwrap_or_else(|e| panic!("naga cannot read its own WGSL: {}", e.emit_to_string(&source)));
+    validate(&reparsed, Capabilities::empty(), "WGSL read back");
+    assert_eq!(entry_points(&reparsed), entry_points(&module));
+}
