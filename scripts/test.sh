@@ -23,4 +23,11 @@ if ! command -v xvfb-run >/dev/null 2>&1; then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq xvfb xauth >/dev/null
 fi
 
+# Without a desktop session, Mesa's Vulkan device-select layer makes
+# libwayland print an XDG_RUNTIME_DIR error at every GPU test; the layer has
+# nothing to choose by there (the app switches it off the same way).
+if [ -z "${XDG_RUNTIME_DIR:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
+    export NODEVICE_SELECT="${NODEVICE_SELECT:-1}"
+fi
+
 cargo test --release --workspace "$@"

@@ -736,7 +736,7 @@ const GPU_MACHINE_REPORT: &str = "PERFORMANCE-H100.md";
 fn gpu_machine_section(report: Option<&Path>) -> String {
     let command = format!(
         "`pathtracer bench throughput --backend gpu --reps 10 --report docs/{GPU_MACHINE_REPORT}` (the kernel \
-         is embedded in the release binary; DESIGN section 9)"
+         is embedded in the release binary: copy it there with the Vulkan loader)"
     );
     let beside = report.and_then(Path::parent).map(|d| d.join(GPU_MACHINE_REPORT));
     if beside.is_some_and(|p| p.exists()) {

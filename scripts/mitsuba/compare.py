@@ -14,7 +14,7 @@ Fairness:
   limit, pixel filter, and one sample stream per pixel per sample count;
   Mitsuba renders each count from scratch (it has no progressive mode), so
   its time at N spp is one N-spp render, while ours accumulates.
-- relMSE is DESIGN section 7's: mean((I - R)^2 / (R^2 + 0.01)) per pixel and
+- relMSE is the project's (docs/ARCHITECTURE.md, Conventions): mean((I - R)^2 / (R^2 + 0.01)) per pixel and
   channel.
 
 Usage: compare.py SCENE.toml REFERENCE.exr OUT.csv [--max-spp 1024] [--seeds 3]

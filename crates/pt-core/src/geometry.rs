@@ -167,8 +167,8 @@ mod tests {
     /// hit only by the ray that starts just behind it.
     #[test]
     fn shadow_walls_cover_every_wall_index() {
-        use crate::integrator::{ShadowWalls, occluded};
         use crate::params::FrameParams;
+        use crate::query::{ShadowWalls, occluded};
         use crate::ray::Ray;
 
         let mut geometry = Geometry::zeroed();
@@ -197,9 +197,9 @@ mod tests {
     /// the back wall (which must then still cast its shadow).
     #[test]
     fn skipping_hull_walls_changes_no_shadow_ray() {
-        use crate::integrator::{ShadowWalls, occluded};
         use crate::light::{SphereLight, light_cone};
         use crate::params::FrameParams;
+        use crate::query::{ShadowWalls, occluded};
         use crate::ray::{Ray, offset_origin};
         use crate::rng::Rng;
 

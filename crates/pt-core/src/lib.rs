@@ -7,11 +7,13 @@
 #![deny(missing_docs)]
 
 pub mod accum;
+pub mod bsdf;
 pub mod camera;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
 pub mod params;
+pub mod query;
 pub mod ray;
 pub mod rng;
 pub mod sampler;

@@ -95,7 +95,7 @@ impl LightCone {
 
 /// How far the glow lobe reaches past the light's cone, in `1 - cos` of the
 /// angle to the light: 0.125, 29 degrees around a point-sized light. Chosen
-/// with [`crate::integrator::GLOW_PROBABILITY`] by the relMSE at 64 spp on
+/// with [`crate::bsdf::GLOW_PROBABILITY`] by the relMSE at 64 spp on
 /// the default scene, among reaches 1/16, 1/8 and 1/4 and probabilities
 /// 0.2, 0.25 and 0.35: the neighbours of this pair were 4% to 14% worse.
 pub const GLOW_REACH: f32 = 0.125;

@@ -59,7 +59,7 @@ pub struct FrameParams {
     pub frame: u32,
     /// Camera samples per pixel in this frame.
     pub samples_per_frame: u32,
-    /// Maximum scattering events on a path (DESIGN section 4).
+    /// Maximum scattering events on a path (docs/ARCHITECTURE.md, Conventions).
     pub max_bounces: u32,
     /// Russian roulette starts once a path has this many bounces.
     pub rr_start: u32,

@@ -3,7 +3,7 @@
 //! runs fastest.
 //!
 //! What lavapipe (Mesa 22.3) does with the general loops of
-//! [`crate::integrator::closest_hit`] and [`crate::integrator::occluded`]:
+//! [`crate::query::closest_hit`] and [`crate::query::occluded`]:
 //! - It reads the uniform block lane by lane: a bounds-checked gather of
 //!   one scalar load per lane and component, for every read
 //!   (`visit_load_ubo` in `lp_bld_nir_soa.c` broadcasts one load only where
@@ -23,8 +23,8 @@
 //! form elsewhere (docs/ARCHITECTURE.md has the measured figures).
 
 use crate::geometry::Geometry;
-use crate::integrator::{Hit, Objects, ShadowWalls, sphere_blocks};
 use crate::params::FrameParams;
+use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface};
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::wall::Wall;
@@ -52,8 +52,11 @@ fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
 }
 
 /// The first `W` walls and `S` spheres of a scene (`W` at most 8, `S` at
-/// most 4), with the counts in use. Built once per pixel and frame.
-pub struct SmallScene<const W: u32, const S: u32> {
+/// most 4), with the counts in use. Built once per pixel and frame. Shading
+/// data is read from the scene itself, at the hit's index: once per path
+/// vertex, against many tests per ray.
+pub struct SmallScene<'a, const W: u32, const S: u32> {
+    geometry: &'a Geometry,
     /// Slots past `W` and `S` are never read, and the compiler drops them.
     walls: [Wall; MAX_WALLS as usize],
     spheres: [Sphere; MAX_SPHERES as usize],
@@ -75,7 +78,7 @@ pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> 
     SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size))
 }
 
-impl<const W: u32, const S: u32> SmallScene<W, S> {
+impl<'a, const W: u32, const S: u32> SmallScene<'a, W, S> {
     /// Whether this capacity renders the scene exactly as the general
     /// loops: it holds every wall and sphere, and no wall can block a
     /// shadow ray (which is what a closed room with the light inside gives),
@@ -86,11 +89,12 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
     /// capacity are clamped: the caller checks [`SmallScene::fits`].
-    pub fn new(params: &FrameParams, geometry: &Geometry) -> Self {
+    pub fn new(params: &FrameParams, geometry: &'a Geometry) -> Self {
         const { assert!(W <= MAX_WALLS && S <= MAX_SPHERES) };
         let w = &geometry.walls;
         let s = &geometry.spheres;
         Self {
+            geometry,
             walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
             spheres: [s[0], s[1], s[2], s[3]],
             wall_count: params.wall_count.min(W),
@@ -99,8 +103,8 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
     }
 }
 
-impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
-    /// The same tests as [`crate::integrator::closest_hit`], in the same
+impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
+    /// The same tests as [`crate::query::closest_hit`], in the same
     /// order, on the copy.
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
         let mut hit = Hit::none(t_max);
@@ -125,13 +129,18 @@ impl<const W: u32, const S: u32> Objects for SmallScene<W, S> {
         unrolled::<S>(|i| blocked |= i < self.sphere_count && sphere_blocks(&self.spheres[i as usize], ray, t_max));
         blocked
     }
+
+    #[inline(always)]
+    fn surface(&self, hit: &Hit, ray: &Ray) -> Surface {
+        surface(self.geometry, hit, ray)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::{HitKind, closest_hit};
     use crate::light::{SphereLight, light_cone};
+    use crate::query::{HitKind, closest_hit};
     use crate::rng::Rng;
     use spirv_std::glam::Vec3;
 
@@ -212,7 +221,7 @@ mod tests {
         for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (6, 4), (8, 3), (8, 4)] {
             let (params, geometry) = scene(walls, spheres, LIGHT);
             // The smallest capacity that holds the counts, as the renderer picks.
-            let (small, fits): (&dyn Objects, bool) = if walls <= 5 && spheres <= 2 {
+            let (small, fits): (&dyn SceneView, bool) = if walls <= 5 && spheres <= 2 {
                 (&SmallScene::<5, 2>::new(&params, &geometry), SmallScene::<5, 2>::fits(&params, &geometry))
             } else {
                 (&SmallScene::<8, 4>::new(&params, &geometry), SmallScene::<8, 4>::fits(&params, &geometry))

@@ -1,4 +1,4 @@
-//! Error metrics of DESIGN section 7, and region statistics for tests.
+//! Error metrics (docs/ARCHITECTURE.md, Conventions), and region statistics for tests.
 
 /// Mean over pixels and channels of `f(image, reference)`, in f64.
 fn mean_over(image: &[[f32; 3]], reference: &[[f32; 3]], f: impl Fn(f64, f64) -> f64) -> f64 {

@@ -177,7 +177,7 @@ pub struct RenderSettings {
     pub height: u32,
     /// Samples per pixel in all.
     pub spp: u32,
-    /// Maximum scattering events per path (DESIGN section 4).
+    /// Maximum scattering events per path (docs/ARCHITECTURE.md, Conventions).
     pub max_bounces: u32,
     /// Bounces before Russian roulette starts.
     pub rr_start: u32,
@@ -225,7 +225,7 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The built-in default scene (DESIGN section 3).
+    /// The built-in default scene, `scenes/default.toml`.
     pub fn default_scene() -> Self {
         Self::from_toml(DEFAULT_SCENE_TOML, Path::new(DEFAULT_SCENE_NAME)).expect("the embedded default scene is valid")
     }

@@ -1,0 +1,68 @@
+//! BSDF sampling: the one material, Lambertian, sampled by its cosine lobe
+//! mixed with a lobe aimed at the light. A second material would add its
+//! own sampler and density beside [`Scatter`], chosen by the surface's
+//! material.
+
+use spirv_std::glam::{Vec2, Vec3};
+
+use crate::light::{GlowLobe, LightCone};
+use crate::sampling::{PI, about_axis, cosine_polar};
+
+/// Probability that BSDF sampling draws from the glow lobe instead of the
+/// cosine lobe (with `FLAG_GLOW`): chosen by `pathtracer bench`.
+pub const GLOW_PROBABILITY: f32 = 0.25;
+
+/// BSDF sampling at a diffuse vertex: the cosine lobe about the shading
+/// normal, mixed with the glow lobe around the light. One draw picks a lobe
+/// with fixed probabilities and the estimate divides by the mixture's
+/// density (one-sample MIS with the balance heuristic; Veach 1997, 9.2.4),
+/// which is never below 3/4 of the cosine lobe's: no direction the BSDF
+/// reaches gets a large weight.
+pub struct Scatter {
+    n: Vec3,
+    glow: GlowLobe,
+    /// 0 without the glow lobe.
+    glow_probability: f32,
+}
+
+impl Scatter {
+    /// Sampling about unit normal `n`, with the glow lobe around `cone` when
+    /// `glow` is set, the cone is not empty and the lobe is not wholly below
+    /// the surface (the unlit side of a sphere keeps all of its samples).
+    /// Without it the lobe is not built (a logarithm per vertex).
+    #[inline]
+    pub fn new(n: Vec3, cone: &LightCone, glow: bool) -> Self {
+        let glow = glow && !cone.is_empty();
+        let lobe = if glow { GlowLobe::new(cone) } else { GlowLobe::UNUSED };
+        let glow_probability = if glow && !lobe.below_horizon(n) { GLOW_PROBABILITY } else { 0.0 };
+        Self { n, glow: lobe, glow_probability }
+    }
+
+    /// A direction from `u` in [0, 1)^2: `u.x` picks the lobe and is
+    /// stretched back to [0, 1) for it, which keeps its stratification.
+    ///
+    /// Both lobes are symmetric about an axis, so only the axis and the
+    /// polar angle depend on the pick; the basis and the turn about the axis
+    /// are shared. SIMD lanes that pick different lobes then run one basis
+    /// and one sine and cosine, not both lobes' (a GPU runs both sides of a
+    /// divergent branch).
+    #[inline]
+    pub fn sample(&self, u: Vec2) -> Vec3 {
+        let p = self.glow_probability;
+        let (axis, (cos_theta, sin_theta)) = if u.x < p {
+            (self.glow.axis(), self.glow.polar(u.x / p))
+        } else {
+            (self.n, cosine_polar((u.x - p) / (1.0 - p)))
+        };
+        about_axis(axis, cos_theta, sin_theta, u.y)
+    }
+
+    /// Solid-angle density of [`Scatter::sample`] at unit `dir`.
+    #[inline]
+    pub fn pdf(&self, dir: Vec3) -> f32 {
+        let p = self.glow_probability;
+        let cosine = self.n.dot(dir).max(0.0) * (1.0 / PI);
+        let glow = if p > 0.0 { self.glow.pdf(dir) } else { 0.0 };
+        (1.0 - p) * cosine + p * glow
+    }
+}
