@@ -10,6 +10,7 @@ use naga::{Handle, Module, Type, TypeInner, front::spv};
 use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
 use pt_core::{AccumPixel, Camera, FrameParams, Geometry, Sphere, SphereLight, Wall};
 use pt_render::KERNEL_SPV;
+use pt_render::gpu::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS};
 
 fn module() -> Module {
     spv::parse_u8_slice(KERNEL_SPV, &spv::Options::default()).expect("naga reads the kernel")
@@ -82,7 +83,7 @@ fn wall_layout() -> (u32, Vec<u32>) {
 #[test]
 fn frame_params_match_the_uniform_block() {
     let m = module();
-    let params = member(&m, bound(&m, 0), 0);
+    let params = member(&m, bound(&m, PARAMS), 0);
     assert_eq!(
         layout(&m, params),
         host_layout!(FrameParams {
@@ -114,7 +115,7 @@ fn frame_params_match_the_uniform_block() {
 #[test]
 fn geometry_matches_the_uniform_block() {
     let m = module();
-    let geometry = member(&m, bound(&m, 1), 0);
+    let geometry = member(&m, bound(&m, GEOMETRY), 0);
     assert_eq!(layout(&m, geometry), host_layout!(Geometry { walls, spheres }));
 
     let (wall, stride, len) = array(&m, member(&m, geometry, 0));
@@ -129,7 +130,7 @@ fn geometry_matches_the_uniform_block() {
 #[test]
 fn accumulation_pixels_match_the_storage_array() {
     let m = module();
-    let (px, stride, len) = array(&m, member(&m, bound(&m, 2), 0));
+    let (px, stride, len) = array(&m, member(&m, bound(&m, ACCUM), 0));
     assert_eq!(len, None);
     assert_eq!(stride as usize, size_of::<AccumPixel>());
     assert_eq!(layout(&m, px), host_layout!(AccumPixel { sum, samples, compensation, non_finite }));
@@ -145,4 +146,50 @@ fn host_layouts_are_the_documented_ones() {
     assert_eq!(size_of::<Sphere>(), 32);
     assert_eq!(size_of::<AccumPixel>(), 32);
     assert_eq!(size_of::<Geometry>(), 96 * 112 + 128 * 32);
+}
+
+/// A type as a struct's size, `[element]`, `u32` or `atomic u32`. naga
+/// keeps no type names, so structs are told apart by size here; the tests
+/// above check their members.
+fn describe(m: &Module, ty: Handle<Type>) -> String {
+    match &m.types[ty].inner {
+        TypeInner::Struct { span, .. } => format!("struct of {span} bytes"),
+        TypeInner::Array { base, .. } => format!("[{}]", describe(m, *base)),
+        TypeInner::Scalar(s) if *s == naga::Scalar::U32 => "u32".into(),
+        TypeInner::Atomic(s) if *s == naga::Scalar::U32 => "atomic u32".into(),
+        other => format!("{other:?}"),
+    }
+}
+
+/// What the block struct rust-gpu wraps around every binding holds.
+fn bound_type(m: &Module, ty: Handle<Type>) -> String {
+    describe(m, member(m, ty, 0))
+}
+
+/// Case: every binding the kernel declares is one the host names in
+/// `gpu::bindings`, with the type and address space the host binds there;
+/// a binding renumbered on one side only fails here.
+#[test]
+fn every_kernel_binding_is_the_one_the_host_names() {
+    let m = module();
+    let found: std::collections::BTreeSet<(u32, bool, String)> = m
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| {
+            let b = g.binding.as_ref()?;
+            assert_eq!(b.group, 0, "the host binds group 0 only");
+            let uniform = matches!(g.space, naga::AddressSpace::Uniform);
+            Some((b.binding, uniform, bound_type(&m, g.ty)))
+        })
+        .collect();
+    let block = |size: usize| format!("struct of {size} bytes");
+    let expected = [
+        (PARAMS, true, block(size_of::<FrameParams>())),
+        (GEOMETRY, true, block(size_of::<Geometry>())),
+        (ACCUM, false, format!("[{}]", block(size_of::<AccumPixel>()))),
+        (DISPLAY, false, "[u32]".to_string()),
+        // `accumulate` adds to it atomically.
+        (NON_FINITE, false, "[atomic u32]".to_string()),
+    ];
+    assert_eq!(found, expected.into_iter().collect());
 }

@@ -1,7 +1,9 @@
 //! The path tracer's GPU entry points. Each is a thin wrapper: the work is
 //! done by `pt-core` functions that the CPU renderer and tests also call.
 //!
-//! Bindings (descriptor set 0); `pt-render` creates the layouts:
+//! Bindings (descriptor set 0); the host names them in
+//! `pt-render/src/gpu/bindings.rs`, and its layout test checks these
+//! numbers against those names:
 //! 0 `FrameParams` (uniform), 1 `Geometry` (uniform: walls and spheres),
 //! 2 accumulation buffer, 3 display buffer (RGBA8 packed in u32),
 //! 4 non-finite sample counter.

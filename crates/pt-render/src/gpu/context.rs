@@ -1,0 +1,164 @@
+//! The device and queue on the best adapter, with the kernel compiled once
+//! for every renderer made on it.
+
+use std::sync::{Arc, Mutex, OnceLock};
+
+use pt_core::small_scene::SMALL_SCENE_SIZES;
+
+use super::GpuError;
+use super::kernel::{Kernel, compute_pipeline, small_scene_entry};
+
+/// A device and queue on the best adapter available, with its description.
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter: name, backend, driver, type.
+    pub adapter_info: wgpu::AdapterInfo,
+    adapter: wgpu::Adapter,
+    /// Set by the device-lost callback or the uncaptured-error handler.
+    failure: Arc<Mutex<Option<String>>>,
+    /// The kernel's pipelines, compiled on first use.
+    kernel: OnceLock<Kernel>,
+    /// The small-scene kernels, one per entry of `SMALL_SCENE_SIZES`,
+    /// compiled on first use.
+    small_kernels: OnceLock<Vec<wgpu::ComputePipeline>>,
+}
+
+/// Preference among adapter types: a real GPU first, the software driver
+/// last but accepted.
+fn adapter_rank(t: wgpu::DeviceType) -> u32 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+impl GpuContext {
+    /// A headless context on the best adapter (discrete, integrated,
+    /// virtual, then software such as lavapipe).
+    pub fn new() -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_instance(&instance, None)
+    }
+
+    /// A context on the best adapter of `instance` that can present to
+    /// `surface` when one is given.
+    pub fn with_instance(instance: &wgpu::Instance, surface: Option<&wgpu::Surface<'_>>) -> Result<Self, GpuError> {
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let adapter = adapters
+            .into_iter()
+            .filter(|a| surface.is_none_or(|s| a.is_surface_supported(s)))
+            .min_by_key(|a| adapter_rank(a.get_info().device_type))
+            .ok_or(GpuError::NoAdapter)?;
+        let adapter_info = adapter.get_info();
+        // Timestamp queries time the kernel where the adapter has them.
+        let required_features =
+            adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("pathtracer"),
+            required_features,
+            // The adapter's own limits: large images need large buffers.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name.clone(), source })?;
+
+        let failure = Arc::new(Mutex::new(None));
+        let lost = failure.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut f) = lost.lock() {
+                f.get_or_insert(format!("{reason:?}: {message}"));
+            }
+        });
+        let errors = failure.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut f) = errors.lock() {
+                f.get_or_insert(e.to_string());
+            }
+        }));
+        Ok(Self {
+            device,
+            queue,
+            adapter_info,
+            adapter,
+            failure,
+            kernel: Default::default(),
+            small_kernels: Default::default(),
+        })
+    }
+
+    pub(super) fn kernel(&self) -> &Kernel {
+        self.kernel.get_or_init(|| Kernel::new(&self.device))
+    }
+
+    pub(super) fn small_kernels(&self) -> &[wgpu::ComputePipeline] {
+        self.small_kernels.get_or_init(|| {
+            let k = self.kernel();
+            SMALL_SCENE_SIZES
+                .iter()
+                .map(|&size| {
+                    compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, &small_scene_entry(size))
+                })
+                .collect()
+        })
+    }
+
+    /// The adapter (surface capabilities are asked of it).
+    pub fn adapter(&self) -> &wgpu::Adapter {
+        &self.adapter
+    }
+
+    /// "name (backend, driver driver_info)", for reports.
+    pub fn adapter_description(&self) -> String {
+        let i = &self.adapter_info;
+        format!("{} ({:?}, {:?}, driver {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info)
+    }
+
+    /// Whether this adapter is a software rasteriser (lavapipe).
+    pub fn is_software(&self) -> bool {
+        self.adapter_info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Waits for all submitted work, then reports a lost device or an
+    /// uncaptured error that happened meanwhile.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        self.check()
+    }
+
+    /// Reports a lost device or uncaptured error seen so far.
+    pub fn check(&self) -> Result<(), GpuError> {
+        match self.failure.lock().ok().and_then(|f| f.clone()) {
+            Some(msg) if msg.contains("Lost") || msg.contains("lost") => Err(GpuError::DeviceLost(msg)),
+            Some(msg) => Err(GpuError::Validation(msg)),
+            None => Ok(()),
+        }
+    }
+
+    /// Copies `size` bytes of `src` to the host.
+    pub fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Result<Vec<u8>, GpuError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+        self.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv().map_err(|e| GpuError::DeviceLost(e.to_string()))?.map_err(|e| GpuError::DeviceLost(e.to_string()))?;
+        let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Validation(e.to_string()))?.to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+}

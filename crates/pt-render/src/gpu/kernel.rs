@@ -1,0 +1,118 @@
+//! The kernel module and its compute pipelines.
+
+use pt_core::Geometry;
+
+use super::KERNEL_SPV;
+use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, bind_group_layout, storage_entry, uniform_entry};
+
+/// The compiled compute pipelines and their layouts, made once per device:
+/// compiling them is the slow part of a renderer's creation (hundreds of
+/// milliseconds on lavapipe), and renderers come and go (seeds, resizes).
+#[derive(Clone)]
+pub(super) struct Kernel {
+    pub(super) trace_layout: wgpu::BindGroupLayout,
+    pub(super) display_layout: wgpu::BindGroupLayout,
+    pub(super) accumulate: wgpu::ComputePipeline,
+    pub(super) display: wgpu::ComputePipeline,
+    /// For the other workgroup shapes (benchmarks): compiled on demand.
+    pub(super) module: wgpu::ShaderModule,
+    pub(super) trace_pipeline_layout: wgpu::PipelineLayout,
+}
+
+/// The two forms of the trace kernel.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum TraceKernel {
+    /// `accumulate` (and its other workgroup shapes): the uniform block read
+    /// in loops, for any scene. The default on GPUs.
+    General,
+    /// `accumulate_small_*`: a copy of a small scene read at constant
+    /// indices (`pt_core::small_scene`), in the smallest capacity that holds
+    /// the scene; frames of scenes that fit none use `General`. The default
+    /// on CPU adapters (lavapipe), where it measured faster
+    /// (docs/ARCHITECTURE.md).
+    SmallScene,
+}
+
+impl TraceKernel {
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::General => "general kernel",
+            Self::SmallScene => "small-scene kernel",
+        }
+    }
+}
+
+/// The entry point of the small-scene kernel of capacity (walls, spheres).
+pub(super) fn small_scene_entry((walls, spheres): (u32, u32)) -> String {
+    format!("accumulate_small_{walls}w_{spheres}s")
+}
+
+/// The workgroup shapes the kernel has an `accumulate` entry point for:
+/// (entry point, width, height). The first is the default.
+pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] = [
+    ("accumulate", 8, 8),
+    ("accumulate_16x4_groups", 16, 4),
+    ("accumulate_32x2_groups", 32, 2),
+    ("accumulate_4x4_groups", 4, 4),
+];
+
+pub(super) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+impl Kernel {
+    pub(super) fn new(device: &wgpu::Device) -> Self {
+        let module = kernel_module(device);
+        // wgpu matches storage access exactly, and the accumulation buffer is
+        // read-write for `accumulate` but read-only for `display`: one
+        // layout per entry point, each with the bindings it uses.
+        let trace_layout = bind_group_layout(
+            device,
+            "accumulate",
+            &[uniform_entry::<Geometry>(GEOMETRY), storage_entry(ACCUM, false), storage_entry(NON_FINITE, false)],
+        );
+        let display_layout =
+            bind_group_layout(device, "display", &[storage_entry(ACCUM, true), storage_entry(DISPLAY, false)]);
+        let pipeline_layout = |label: &str, layout: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            })
+        };
+        let trace_pipeline_layout = pipeline_layout("accumulate", &trace_layout);
+        let accumulate = compute_pipeline(device, &module, &trace_pipeline_layout, "accumulate");
+        let display = compute_pipeline(device, &module, &pipeline_layout("display", &display_layout), "display");
+        Self { trace_layout, display_layout, accumulate, display, module, trace_pipeline_layout }
+    }
+}
+
+/// The kernel module. naga's SPIR-V front end reads what rust-gpu emits for
+/// this kernel, so wgpu validates it like any shader (no passthrough), but
+/// without the runtime checks naga would add to the code it writes out: a
+/// clamp on every array index, and a counter on every loop that breaks out
+/// after 2^64 iterations. The kernel is Rust: rust-gpu keeps Rust's own
+/// bounds checks, and every loop in it is bounded (the per-pixel loop by
+/// `samples_per_frame` paths of at most `max_bounces + 1` segments, the
+/// object loops by counts clamped to the arrays, the shadow-wall loop by a
+/// 32-bit mask shifted each turn). What it saved: docs/ARCHITECTURE.md.
+pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
+    let desc = wgpu::ShaderModuleDescriptor { label: Some("pt-kernel"), source: wgpu::util::make_spirv(KERNEL_SPV) };
+    // SAFETY: see above: the kernel indexes only through Rust's bounds
+    // checks and has no unbounded loop, which is what the unchecked
+    // options ask of the caller.
+    unsafe { device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
+}

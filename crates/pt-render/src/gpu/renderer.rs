@@ -1,0 +1,347 @@
+//! The progressive GPU renderer for one scene and image size.
+
+use pt_core::small_scene::smallest_fit;
+use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
+use wgpu::util::DeviceExt;
+
+use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
+use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline};
+use super::{GpuContext, GpuError, GpuTimer};
+
+/// The progressive GPU renderer for one scene and image size.
+pub struct GpuRenderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    trace_layout: wgpu::BindGroupLayout,
+    display_layout: wgpu::BindGroupLayout,
+    accumulate: wgpu::ComputePipeline,
+    display: wgpu::ComputePipeline,
+    params_buf: wgpu::Buffer,
+    geometry_buf: wgpu::Buffer,
+    accum_buf: wgpu::Buffer,
+    display_buf: wgpu::Buffer,
+    /// One u32: non-finite samples discarded since the last reset.
+    non_finite_buf: wgpu::Buffer,
+    trace_group: wgpu::BindGroup,
+    display_group: wgpu::BindGroup,
+    params: FrameParams,
+    /// The geometry block's contents, for `small_scene::smallest_fit`.
+    geometry: Box<Geometry>,
+    /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES`),
+    /// where they are chosen.
+    accumulate_small: Option<Vec<wgpu::ComputePipeline>>,
+    /// `smallest_fit` of the current scene and light: worked out when they
+    /// change, not every frame.
+    small_fit: Option<usize>,
+    /// Index of the next frame: distinct per dispatch, part of the RNG seed.
+    next_frame: u32,
+    /// Samples per pixel accumulated since the last reset (Sobol index).
+    samples_done: u32,
+    /// Workgroup size of the `accumulate` pipeline in use.
+    trace_shape: (u32, u32),
+}
+
+/// The uniform buffer holding `geometry`.
+fn geometry_buffer(device: &wgpu::Device, geometry: &Geometry) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("geometry"),
+        contents: bytemuck::bytes_of(geometry),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
+impl GpuRenderer {
+    /// A renderer for `params` (size, camera, light, settings) and geometry.
+    pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
+        let device = ctx.device.clone();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let Kernel { trace_layout, display_layout, accumulate, display, .. } = ctx.kernel().clone();
+
+        let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let geometry = Box::new(crate::scene::geometry(walls, spheres)?);
+        let geometry_buf = geometry_buffer(&device, &geometry);
+        let (accum_buf, display_buf) = Self::image_buffers(&device, params.width, params.height)?;
+        let non_finite_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("non-finite count"),
+            size: 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let trace_group = bind_group(
+            &device,
+            &trace_layout,
+            &[(PARAMS, &params_buf), (GEOMETRY, &geometry_buf), (ACCUM, &accum_buf), (NON_FINITE, &non_finite_buf)],
+        );
+        let display_group = bind_group(
+            &device,
+            &display_layout,
+            &[(PARAMS, &params_buf), (ACCUM, &accum_buf), (DISPLAY, &display_buf)],
+        );
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        let kernel = Self::default_trace_kernel(ctx);
+        let mut renderer = Self {
+            device,
+            queue: ctx.queue.clone(),
+            trace_layout,
+            display_layout,
+            accumulate,
+            display,
+            params_buf,
+            geometry_buf,
+            accum_buf,
+            display_buf,
+            non_finite_buf,
+            trace_group,
+            display_group,
+            params,
+            small_fit: smallest_fit(&params, &geometry),
+            geometry,
+            accumulate_small: None,
+            next_frame: 0,
+            samples_done: 0,
+            trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
+        };
+        renderer.set_trace_kernel(ctx, kernel);
+        Ok(renderer)
+    }
+
+    fn image_buffers(device: &wgpu::Device, width: u32, height: u32) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+        let pixels = width as u64 * height as u64;
+        let bytes = pixels * size_of::<AccumPixel>() as u64;
+        let limits = device.limits();
+        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        if bytes > limit {
+            return Err(GpuError::TooLarge { width, height, bytes, limit });
+        }
+        let accum = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("accumulation"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            // New buffers are zeroed by wgpu: an empty accumulation.
+            mapped_at_creation: false,
+        });
+        let display = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("display"),
+            size: pixels * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        Ok((accum, display))
+    }
+
+    /// The current parameters.
+    pub fn params(&self) -> &FrameParams {
+        &self.params
+    }
+
+    /// Replaces the parameters. A change of image size reallocates the
+    /// image buffers; the caller decides whether accumulation restarts.
+    pub fn set_params(&mut self, params: FrameParams) -> Result<(), GpuError> {
+        if (params.width, params.height) != (self.params.width, self.params.height) {
+            let (accum, display) = Self::image_buffers(&self.device, params.width, params.height)?;
+            self.accum_buf = accum;
+            self.display_buf = display;
+            self.rebind();
+            self.next_frame = 0;
+            self.samples_done = 0;
+        }
+        self.params = params;
+        self.small_fit = smallest_fit(&self.params, &self.geometry);
+        Ok(())
+    }
+
+    /// Replaces the geometry (walls and spheres). The block has a fixed
+    /// size, so it is rewritten in place (ordered before the next frame).
+    pub fn set_geometry(&mut self, walls: &[Wall], spheres: &[Sphere]) -> Result<(), GpuError> {
+        *self.geometry = crate::scene::geometry(walls, spheres)?;
+        self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&*self.geometry));
+        self.params.wall_count = walls.len() as u32;
+        self.params.sphere_count = spheres.len() as u32;
+        self.small_fit = smallest_fit(&self.params, &self.geometry);
+        Ok(())
+    }
+
+    fn rebind(&mut self) {
+        self.trace_group = bind_group(
+            &self.device,
+            &self.trace_layout,
+            &[
+                (PARAMS, &self.params_buf),
+                (GEOMETRY, &self.geometry_buf),
+                (ACCUM, &self.accum_buf),
+                (NON_FINITE, &self.non_finite_buf),
+            ],
+        );
+        self.display_group = bind_group(
+            &self.device,
+            &self.display_layout,
+            &[(PARAMS, &self.params_buf), (ACCUM, &self.accum_buf), (DISPLAY, &self.display_buf)],
+        );
+    }
+
+    /// Clears the accumulated image and restarts the frame count.
+    pub fn reset(&mut self) {
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.accum_buf, 0, None);
+        encoder.clear_buffer(&self.non_finite_buf, 0, None);
+        self.queue.submit([encoder.finish()]);
+        self.next_frame = 0;
+        self.samples_done = 0;
+    }
+
+    /// Frames accumulated since the last reset.
+    pub fn frames(&self) -> u32 {
+        self.next_frame
+    }
+
+    fn workgroups(&self) -> (u32, u32) {
+        (self.params.width.div_ceil(WORKGROUP_SIZE), self.params.height.div_ceil(WORKGROUP_SIZE))
+    }
+
+    /// Traces with the general kernel's entry point of
+    /// `WORKGROUP_SHAPES[shape]` (compiled now unless it is the default;
+    /// benchmarks compare the shapes).
+    pub fn set_workgroup_shape(&mut self, ctx: &GpuContext, shape: usize) {
+        let (entry, w, h) = WORKGROUP_SHAPES[shape];
+        let k = ctx.kernel();
+        // The default shape is compiled already.
+        self.accumulate = if shape == 0 {
+            k.accumulate.clone()
+        } else {
+            compute_pipeline(&ctx.device, &k.module, &k.trace_pipeline_layout, entry)
+        };
+        self.trace_shape = (w, h);
+        self.accumulate_small = None;
+    }
+
+    /// The trace kernel a renderer on `ctx` starts with: the small-scene
+    /// kernel on CPU adapters, the general one on GPUs.
+    pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
+        if ctx.is_software() { TraceKernel::SmallScene } else { TraceKernel::General }
+    }
+
+    /// Chooses the form of the trace kernel (compiled now if need be; the
+    /// renderer starts with the adapter's default). The small-scene kernel
+    /// comes in the default 8x8 shape only.
+    pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
+        if kernel == TraceKernel::SmallScene {
+            self.set_workgroup_shape(ctx, 0);
+            self.accumulate_small = Some(ctx.small_kernels().to_vec());
+        } else {
+            self.accumulate_small = None;
+        }
+    }
+
+    /// The small-scene pipeline the next frame runs, if any: where the
+    /// small-scene kernel is chosen, the smallest capacity that holds the
+    /// scene.
+    fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
+        self.accumulate_small.as_ref()?.get(self.small_fit?)
+    }
+
+    /// The kernel the next frame runs: the small-scene kernel where it is
+    /// chosen and the scene fits it, else the general one.
+    pub fn trace_kernel(&self) -> TraceKernel {
+        if self.small_pipeline().is_some() { TraceKernel::SmallScene } else { TraceKernel::General }
+    }
+
+    /// Submits one frame of `samples` samples per pixel. Nothing waits: the
+    /// queue orders this parameter write before the frame's dispatch.
+    pub fn submit_frame(&mut self, samples: u32) {
+        self.submit_frame_timed(samples, None);
+    }
+
+    /// [`GpuRenderer::submit_frame`], with the dispatch timed by `timer`
+    /// when one is given (read it with [`GpuTimer::read_ms`]).
+    pub fn submit_frame_timed(&mut self, samples: u32, timer: Option<&GpuTimer>) {
+        self.params.frame = self.next_frame;
+        self.params.samples_per_frame = samples;
+        self.params.sample_offset = self.samples_done;
+        self.samples_done = self.samples_done.saturating_add(samples);
+        self.write_params();
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        self.encode_accumulate(&mut encoder, timer.map(GpuTimer::pass_writes));
+        if let Some(t) = timer {
+            t.resolve(&mut encoder);
+        }
+        self.queue.submit([encoder.finish()]);
+        self.next_frame += 1;
+    }
+
+    /// Writes the parameters (display settings included) without a frame.
+    pub fn write_params(&self) {
+        self.queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
+    }
+
+    /// The uniform buffer of the parameters.
+    pub fn params_buffer(&self) -> &wgpu::Buffer {
+        &self.params_buf
+    }
+
+    /// Records the accumulation dispatch with the parameters last written.
+    pub fn encode_accumulate(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let (x, y) = (self.params.width.div_ceil(self.trace_shape.0), self.params.height.div_ceil(self.trace_shape.1));
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
+        let pipeline = self.small_pipeline().unwrap_or(&self.accumulate);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.trace_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Records the display pass (exposure, tone map, sRGB into the display
+    /// buffer) with the parameters last written.
+    pub fn encode_display(&self, encoder: &mut wgpu::CommandEncoder) {
+        let (x, y) = self.workgroups();
+        let mut pass =
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("display"), timestamp_writes: None });
+        pass.set_pipeline(&self.display);
+        pass.set_bind_group(0, &self.display_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Runs the display pass with `exposure` (stops) and `tonemap`.
+    pub fn submit_display(&mut self, exposure: f32, tonemap: u32) {
+        self.params.exposure = exposure;
+        self.params.tonemap = tonemap;
+        self.queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        self.encode_display(&mut encoder);
+        self.queue.submit([encoder.finish()]);
+    }
+
+    /// The display buffer (RGBA8 per pixel, row 0 at the top): what the
+    /// viewer copies to its texture.
+    pub fn display_buffer(&self) -> &wgpu::Buffer {
+        &self.display_buf
+    }
+
+    /// Reads the accumulation buffer back (waits for the GPU).
+    pub fn read_accum(&self, ctx: &GpuContext) -> Result<Vec<AccumPixel>, GpuError> {
+        let bytes = ctx.read_buffer(&self.accum_buf, self.accum_buf.size())?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// Non-finite samples discarded since the last reset (waits for the GPU;
+    /// four bytes cross the bus).
+    pub fn read_non_finite(&self, ctx: &GpuContext) -> Result<u32, GpuError> {
+        let bytes = ctx.read_buffer(&self.non_finite_buf, 4)?;
+        Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]))
+    }
+
+    /// Reads the display buffer back (waits for the GPU).
+    pub fn read_display(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let bytes = ctx.read_buffer(&self.display_buf, self.display_buf.size())?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
