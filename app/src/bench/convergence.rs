@@ -1,0 +1,305 @@
+//! Error against time: convergence curves per strategy and seed, and the
+//! times to a target error read off them.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use pt_core::AccumPixel;
+use pt_render::gpu::{GpuContext, GpuRenderer};
+use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
+
+use super::{STRATEGIES, Strategy, median_min_max};
+
+/// One point of a convergence curve.
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// Backend label.
+    pub backend: String,
+    /// Strategy label.
+    pub strategy: String,
+    /// Seed.
+    pub seed: u32,
+    /// Samples per pixel so far.
+    pub spp: u32,
+    /// Seconds of rendering so far (evaluation excluded).
+    pub time: f64,
+    /// relMSE against the reference.
+    pub rel_mse: f64,
+    /// MAPE.
+    pub mape: f64,
+    /// RMSE.
+    pub rmse: f64,
+}
+
+fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
+    accum.iter().map(|p| p.mean().to_array()).collect()
+}
+
+/// Renders the reference: `spp` samples per pixel on the CPU, telling
+/// `progress` the samples per pixel done.
+pub fn reference(
+    scene: &Scene,
+    settings: &RenderSettings,
+    spp: u32,
+    mut progress: impl FnMut(u32),
+) -> Result<Vec<[f32; 3]>> {
+    let params = scene.frame_params(settings, 64, REFERENCE_SEED);
+    let mut r = CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres())?;
+    let mut done = 0;
+    while done < spp {
+        let n = 64.min(spp - done);
+        r.render_frame(n);
+        done += n;
+        progress(done);
+    }
+    Ok(means(r.accum()))
+}
+
+/// Seed of the reference render: distinct from every test seed.
+const REFERENCE_SEED: u32 = 0x5eed_0001;
+
+/// Renders `strategy` progressively on one backend up to `max_spp`,
+/// measuring the error at every power-of-two sample count from 4 on.
+/// Time is wall clock around synchronised frames; readback and metric
+/// evaluation are outside it.
+#[allow(clippy::too_many_arguments)]
+fn curve(
+    ctx: Option<&GpuContext>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    strategy: &Strategy,
+    seed: u32,
+    max_spp: u32,
+    reference: &[[f32; 3]],
+    backend: &str,
+) -> Result<Vec<Point>> {
+    let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
+    params.flags = strategy.flags;
+    params.rr_start = strategy.rr_start;
+    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    enum R {
+        Gpu(Box<GpuRenderer>),
+        Cpu(Box<CpuRenderer>),
+    }
+    let mut r = match ctx {
+        Some(c) => R::Gpu(Box::new(GpuRenderer::new(c, params, &walls, &spheres)?)),
+        None => R::Cpu(Box::new(CpuRenderer::new(params, &walls, &spheres)?)),
+    };
+    let mut points = Vec::new();
+    let (mut done, mut next, mut time) = (0u32, 4u32, 0.0f64);
+    while done < max_spp {
+        let start = Instant::now();
+        while done < next {
+            let n = strategy.spp_per_frame.min(next - done);
+            match &mut r {
+                R::Gpu(g) => g.submit_frame(n),
+                R::Cpu(c) => c.render_frame(n),
+            }
+            done += n;
+        }
+        if let Some(c) = ctx {
+            c.wait()?;
+        }
+        time += start.elapsed().as_secs_f64();
+        let accum = match (&r, ctx) {
+            (R::Gpu(g), Some(c)) => g.read_accum(c)?,
+            (R::Cpu(c), _) => c.accum().to_vec(),
+            _ => unreachable!("a GPU renderer has a context"),
+        };
+        let img = means(&accum);
+        points.push(Point {
+            backend: backend.to_string(),
+            strategy: strategy.name.to_string(),
+            seed,
+            spp: done,
+            time,
+            rel_mse: metrics::rel_mse(&img, reference),
+            mape: metrics::mape(&img, reference),
+            rmse: metrics::rmse(&img, reference),
+        });
+        next *= 2;
+    }
+    Ok(points)
+}
+
+/// Convergence curves of every strategy on each backend, `seeds` seeds each.
+pub fn convergence(
+    ctx: Option<&GpuContext>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    max_spp: u32,
+    seeds: u32,
+    reference: &[[f32; 3]],
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Point>> {
+    let mut points = Vec::new();
+    let mut backends: Vec<(Option<&GpuContext>, String)> = Vec::new();
+    if let Some(c) = ctx {
+        backends.push((Some(c), format!("GPU: {}", c.adapter_info.name)));
+    }
+    backends.push((None, format!("CPU: {} threads", rayon::current_num_threads())));
+    for (c, name) in &backends {
+        // Untimed warm-up: the first renders of a run were measured up to
+        // 30% slower (driver and machine warming up), which would have
+        // penalised whichever strategy came first.
+        progress(&format!("{name}: warm-up"));
+        curve(*c, scene, settings, &STRATEGIES[0], 99, max_spp.min(64), reference, name)?;
+        // Seeds outer, strategies inner: any drift of the machine's speed
+        // during the run is spread over all strategies alike.
+        for seed in 0..seeds {
+            progress(&format!("{name}: seed {} of {seeds}, all strategies", seed + 1));
+            for st in &STRATEGIES {
+                points.extend(curve(*c, scene, settings, st, 100 + seed, max_spp, reference, name)?);
+            }
+        }
+    }
+    Ok(points)
+}
+
+/// One sample count of a strategy's curve, over its seeds.
+#[derive(Copy, Clone, Debug)]
+pub struct CurvePoint {
+    /// Median seconds: the machine is shared, and a single run can be
+    /// slowed by half by other work; the median ignores such a spike.
+    pub time: f64,
+    /// Mean relMSE.
+    pub rel_mse: f64,
+    /// Smallest relMSE of a seed.
+    pub rel_mse_min: f64,
+    /// Largest relMSE of a seed.
+    pub rel_mse_max: f64,
+}
+
+/// Median time, mean relMSE and its spread over seeds at each sample count
+/// of a curve.
+pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<CurvePoint> {
+    let mut spps: Vec<u32> =
+        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.spp).collect();
+    spps.sort_unstable();
+    spps.dedup();
+    spps.iter()
+        .map(|&spp| {
+            let sel: Vec<&Point> =
+                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.spp == spp).collect();
+            let n = sel.len() as f64;
+            let (time, _, _) = median_min_max(sel.iter().map(|p| p.time).collect());
+            CurvePoint {
+                time,
+                rel_mse: sel.iter().map(|p| p.rel_mse).sum::<f64>() / n,
+                rel_mse_min: sel.iter().map(|p| p.rel_mse).fold(f64::MAX, f64::min),
+                rel_mse_max: sel.iter().map(|p| p.rel_mse).fold(0.0, f64::max),
+            }
+        })
+        .collect()
+}
+
+/// (time, relMSE) pairs of a mean curve.
+pub fn time_error(curve: &[CurvePoint]) -> Vec<(f64, f64)> {
+    curve.iter().map(|p| (p.time, p.rel_mse)).collect()
+}
+
+/// log-log interpolation of relMSE at time `t` along (time, relMSE) pairs.
+pub(crate) fn rel_mse_at(curve: &[(f64, f64)], t: f64) -> Option<f64> {
+    curve.windows(2).find(|w| w[0].0 <= t && t <= w[1].0).map(|w| {
+        let f = (t.ln() - w[0].0.ln()) / (w[1].0.ln() - w[0].0.ln());
+        (w[0].1.ln() + f * (w[1].1.ln() - w[0].1.ln())).exp()
+    })
+}
+
+/// log-log interpolation of the time at which relMSE reaches `target`
+/// along (time, relMSE) pairs.
+pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
+    curve.windows(2).find(|w| w[0].1 >= target && w[1].1 <= target).map(|w| {
+        let f = (target.ln() - w[0].1.ln()) / (w[1].1.ln() - w[0].1.ln());
+        (w[0].0.ln() + f * (w[1].0.ln() - w[0].0.ln())).exp()
+    })
+}
+
+/// The seeds a strategy was rendered with on `backend`, in order.
+fn seeds(points: &[Point], backend: &str, strategy: &str) -> Vec<u32> {
+    let mut seeds: Vec<u32> =
+        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.seed).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    seeds
+}
+
+/// Each seed's time to relMSE `target` along its own curve, with the seed
+/// (seeds that do not reach it are left out).
+fn times_by_seed(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<(u32, f64)> {
+    seeds(points, backend, strategy)
+        .iter()
+        .filter_map(|&seed| {
+            let mut curve: Vec<&Point> =
+                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.seed == seed).collect();
+            curve.sort_by_key(|p| p.spp);
+            time_to(&curve.iter().map(|p| (p.time, p.rel_mse)).collect::<Vec<_>>(), target).map(|t| (seed, t))
+        })
+        .collect()
+}
+
+/// Each seed's time to relMSE `target` along its own curve (seeds that do
+/// not reach it are left out): the spread of a strategy's time.
+pub fn seed_times_to(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<f64> {
+    times_by_seed(points, backend, strategy, target).into_iter().map(|(_, t)| t).collect()
+}
+
+/// A strategy that reached relMSE `target` sooner than the default in
+/// every seed, run for run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FasterThanDefault {
+    /// The strategy's name.
+    pub name: &'static str,
+    /// Smallest and largest ratio of its time to the default's, over seeds.
+    pub ratios: (f64, f64),
+}
+
+/// The strategies on `backend` that reached relMSE `target` sooner than
+/// the default ([`STRATEGIES`]`[0]`) in every one of the default's seeds,
+/// and the number of those seeds; `None` with fewer than two.
+///
+/// Each seed renders every strategy in turn, so a strategy's run and the
+/// default's run of the same seed share the machine's state (a slow spell
+/// of a shared machine spans both or neither), and their times pair. A
+/// strategy exactly as fast as the default would still be the faster one
+/// of a pair half of the time, and in all `n` pairs with probability 1/2^n
+/// (a sign test): with 5 seeds, 0.031. The fastest median alone can be
+/// such a strategy when two do the same work.
+pub fn faster_than_default(points: &[Point], backend: &str, target: f64) -> Option<(u32, Vec<FasterThanDefault>)> {
+    let default = times_by_seed(points, backend, STRATEGIES[0].name, target);
+    let n = seeds(points, backend, STRATEGIES[0].name).len();
+    if n < 2 {
+        return None;
+    }
+    let faster = STRATEGIES[1..]
+        .iter()
+        .filter_map(|st| {
+            let times = times_by_seed(points, backend, st.name, target);
+            let ratios: Vec<f64> = default
+                .iter()
+                .filter_map(|&(seed, d)| times.iter().find(|&&(s, _)| s == seed).map(|&(_, t)| t / d))
+                .collect();
+            (ratios.len() == n && ratios.iter().all(|&r| r < 1.0)).then(|| {
+                let (_, lo, hi) = median_min_max(ratios);
+                FasterThanDefault { name: st.name, ratios: (lo, hi) }
+            })
+        })
+        .collect();
+    Some((n as u32, faster))
+}
+
+/// Reads a reference EXR and checks its size.
+pub fn load_reference(path: &Path, settings: &RenderSettings) -> Result<Vec<[f32; 3]>> {
+    let (w, h, px) =
+        output::read_exr(path).with_context(|| format!("{}: cannot read the reference", path.display()))?;
+    if (w, h) != (settings.width, settings.height) {
+        anyhow::bail!(
+            "{}: the reference is {w}x{h}, the benchmark renders {}x{}",
+            path.display(),
+            settings.width,
+            settings.height
+        );
+    }
+    Ok(px)
+}

@@ -1,0 +1,78 @@
+//! `pathtracer render`: a scene to a PNG or EXR file, with a progress bar.
+
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_render::output::{self, OutputFormat};
+use pt_render::renderer::render_progressive;
+use pt_render::{Backend, RenderSettings, Renderer};
+
+use super::{load_scene, spp_progress_bar};
+use crate::{BackendArg, RenderArgs, SamplerArg, TonemapArg};
+
+/// Renders the scene to the output file.
+pub(crate) fn run(args: &RenderArgs) -> Result<()> {
+    if !args.exposure.is_finite() {
+        anyhow::bail!("--exposure must be a finite number");
+    }
+    // Everything the user gave is checked before any work starts, and the
+    // output's folder must take a file: a bad argument never costs a render.
+    let format = output::check_writable(&args.out)?;
+    let scene = load_scene(args.scene.as_ref())?;
+    let settings = RenderSettings {
+        width: args.width.unwrap_or(scene.render.width),
+        height: args.height.unwrap_or(scene.render.height),
+        spp: args.spp.unwrap_or(scene.render.spp),
+        max_bounces: args.max_bounces.unwrap_or(scene.render.max_bounces),
+        rr_start: scene.render.rr_start,
+    };
+    let tonemap = match args.tonemap {
+        TonemapArg::Aces => TONEMAP_ACES,
+        TonemapArg::Clamp => TONEMAP_CLAMP,
+    };
+    let mut params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
+    match args.sampler {
+        SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
+        SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
+    }
+    let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    let mut renderer = match args.backend {
+        BackendArg::Gpu => {
+            Renderer::new(Backend::Gpu, params, &walls, &spheres).context("cannot start the GPU renderer")?
+        }
+        BackendArg::Cpu => Renderer::new(Backend::Cpu, params, &walls, &spheres)?,
+        BackendArg::Auto => Renderer::new(Backend::Gpu, params, &walls, &spheres).or_else(|e| {
+            eprintln!("GPU unavailable ({e}); rendering on the CPU");
+            Renderer::new(Backend::Cpu, params, &walls, &spheres)
+        })?,
+    };
+    eprintln!("{}", renderer.description());
+    eprintln!(
+        "rendering {}x{}, {} spp, max {} bounces, seed {}",
+        settings.width, settings.height, settings.spp, settings.max_bounces, args.seed
+    );
+
+    let bar = spp_progress_bar(settings.spp);
+    bar.enable_steady_tick(Duration::from_millis(200));
+    let (accum, stats) =
+        render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| bar.set_position(done as u64))
+            .context("rendering failed")?;
+    bar.finish_and_clear();
+
+    match format {
+        OutputFormat::Png => {
+            let rgba = renderer.display(args.exposure, tonemap).context("display pass failed")?;
+            output::write_png(&args.out, settings.width, settings.height, &rgba)?;
+        }
+        OutputFormat::Exr => {
+            output::write_exr(&args.out, settings.width, settings.height, &output::mean_radiance(&accum))?
+        }
+    }
+    println!("adapter: {}", renderer.description());
+    println!("time: {:.3} s", stats.elapsed.as_secs_f64());
+    println!("samples per second: {:.3e}", stats.samples_per_second());
+    println!("non-finite samples: {}", stats.non_finite);
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
