@@ -2,13 +2,14 @@
 //! rays, 2^25 samples per pixel) passes on the CPU
 //! and on the GPU: every analytic scene, hard case and sampling test.
 
-use pt_render::accuracy::{self, Size, Target};
+use pt_render::Device;
+use pt_render::accuracy::{self, Size};
 use pt_tests::gpu;
 
 #[test]
 fn accuracy_suite_passes_on_cpu_and_gpu() {
     let ctx = gpu();
-    let results = accuracy::run(&[Target::Cpu, Target::Gpu(&ctx)], Size::Full).expect("suite runs");
+    let results = accuracy::run(&[Device::Cpu, Device::Gpu(&ctx)], Size::Full).expect("suite runs");
     let failed: Vec<_> = results.iter().filter(|r| !r.pass).collect();
     assert!(
         failed.is_empty(),

@@ -3,7 +3,7 @@
 
 use pt_core::AccumPixel;
 use pt_render::renderer::render_accum;
-use pt_render::{GpuContext, RenderSettings, Scene};
+use pt_render::{Device, GpuContext, RenderSettings, Scene};
 
 /// A GPU context, or a panic that says why: GPU tests never skip silently.
 /// CI installs Mesa's lavapipe, so an adapter is always there.
@@ -26,12 +26,13 @@ pub fn render_gpu(
     seed: u32,
 ) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
-    render_accum(Some(ctx), params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame)
+    render_accum(Device::Gpu(ctx), params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame)
         .expect("GPU render")
 }
 
 /// The same on the CPU.
 pub fn render_cpu(scene: &Scene, settings: &RenderSettings, per_frame: u32, seed: u32) -> Vec<AccumPixel> {
     let params = scene.frame_params(settings, per_frame, seed);
-    render_accum(None, params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame).expect("CPU render")
+    render_accum(Device::Cpu, params, &scene.gpu_walls(), &scene.gpu_spheres(), settings.spp, per_frame)
+        .expect("CPU render")
 }

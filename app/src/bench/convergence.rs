@@ -6,16 +6,17 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use pt_core::AccumPixel;
-use pt_render::gpu::{GpuContext, GpuRenderer};
+use pt_render::gpu::GpuContext;
 use pt_render::{CpuRenderer, RenderSettings, Scene, metrics, output};
+use pt_render::{Device, Renderer};
 
-use super::{STRATEGIES, Strategy, median_min_max};
+use super::{BenchBackend, STRATEGIES, Strategy, StrategyId, median_min_max};
 
 /// One point of a convergence curve.
 #[derive(Clone, Debug)]
 pub struct Point {
-    /// Backend label.
-    pub backend: String,
+    /// Where it ran.
+    pub backend: BenchBackend,
     /// Strategy label.
     pub strategy: String,
     /// Seed.
@@ -65,51 +66,35 @@ const REFERENCE_SEED: u32 = 0x5eed_0001;
 /// evaluation are outside it.
 #[allow(clippy::too_many_arguments)]
 fn curve(
-    ctx: Option<&GpuContext>,
+    device: Device<'_>,
     scene: &Scene,
     settings: &RenderSettings,
     strategy: &Strategy,
     seed: u32,
     max_spp: u32,
     reference: &[[f32; 3]],
-    backend: &str,
+    backend: &BenchBackend,
 ) -> Result<Vec<Point>> {
     let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
     params.flags = strategy.flags;
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
-    enum R {
-        Gpu(Box<GpuRenderer>),
-        Cpu(Box<CpuRenderer>),
-    }
-    let mut r = match ctx {
-        Some(c) => R::Gpu(Box::new(GpuRenderer::new(c, params, &walls, &spheres)?)),
-        None => R::Cpu(Box::new(CpuRenderer::new(params, &walls, &spheres)?)),
-    };
+    let mut r = Renderer::new(device, params, &walls, &spheres)?;
     let mut points = Vec::new();
     let (mut done, mut next, mut time) = (0u32, 4u32, 0.0f64);
     while done < max_spp {
         let start = Instant::now();
         while done < next {
             let n = strategy.spp_per_frame.min(next - done);
-            match &mut r {
-                R::Gpu(g) => g.submit_frame(n),
-                R::Cpu(c) => c.render_frame(n),
-            }
+            r.frame(n);
             done += n;
         }
-        if let Some(c) = ctx {
-            c.wait()?;
-        }
+        r.wait()?;
         time += start.elapsed().as_secs_f64();
-        let accum = match (&r, ctx) {
-            (R::Gpu(g), Some(c)) => g.read_accum(c)?,
-            (R::Cpu(c), _) => c.accum().to_vec(),
-            _ => unreachable!("a GPU renderer has a context"),
-        };
+        let accum = r.accum()?;
         let img = means(&accum);
         points.push(Point {
-            backend: backend.to_string(),
+            backend: backend.clone(),
             strategy: strategy.name.to_string(),
             seed,
             spp: done,
@@ -134,27 +119,34 @@ pub fn convergence(
     mut progress: impl FnMut(&str),
 ) -> Result<Vec<Point>> {
     let mut points = Vec::new();
-    let mut backends: Vec<(Option<&GpuContext>, String)> = Vec::new();
+    let mut backends: Vec<(Device<'_>, BenchBackend)> = Vec::new();
     if let Some(c) = ctx {
-        backends.push((Some(c), format!("GPU: {}", c.adapter_info.name)));
+        backends.push((Device::Gpu(c), BenchBackend::gpu(&c.adapter_info.name)));
     }
-    backends.push((None, format!("CPU: {} threads", rayon::current_num_threads())));
-    for (c, name) in &backends {
+    backends.push((Device::Cpu, BenchBackend::cpu()));
+    for (device, name) in &backends {
         // Untimed warm-up: the first renders of a run were measured up to
         // 30% slower (driver and machine warming up), which would have
         // penalised whichever strategy came first.
         progress(&format!("{name}: warm-up"));
-        curve(*c, scene, settings, &STRATEGIES[0], 99, max_spp.min(64), reference, name)?;
+        curve(*device, scene, settings, StrategyId::Default.strategy(), 99, max_spp.min(64), reference, name)?;
         // Seeds outer, strategies inner: any drift of the machine's speed
         // during the run is spread over all strategies alike.
         for seed in 0..seeds {
             progress(&format!("{name}: seed {} of {seeds}, all strategies", seed + 1));
             for st in &STRATEGIES {
-                points.extend(curve(*c, scene, settings, st, 100 + seed, max_spp, reference, name)?);
+                points.extend(curve(*device, scene, settings, st, 100 + seed, max_spp, reference, name)?);
             }
         }
     }
     Ok(points)
+}
+
+/// The backends of `points`, in the order they were measured.
+pub fn backends_of(points: &[Point]) -> Vec<BenchBackend> {
+    let mut backends: Vec<BenchBackend> = points.iter().map(|p| p.backend.clone()).collect();
+    backends.dedup();
+    backends
 }
 
 /// One sample count of a strategy's curve, over its seeds.
@@ -173,15 +165,15 @@ pub struct CurvePoint {
 
 /// Median time, mean relMSE and its spread over seeds at each sample count
 /// of a curve.
-pub fn mean_curve(points: &[Point], backend: &str, strategy: &str) -> Vec<CurvePoint> {
+pub fn mean_curve(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<CurvePoint> {
     let mut spps: Vec<u32> =
-        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.spp).collect();
+        points.iter().filter(|p| p.backend == *backend && p.strategy == strategy).map(|p| p.spp).collect();
     spps.sort_unstable();
     spps.dedup();
     spps.iter()
         .map(|&spp| {
             let sel: Vec<&Point> =
-                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.spp == spp).collect();
+                points.iter().filter(|p| p.backend == *backend && p.strategy == strategy && p.spp == spp).collect();
             let n = sel.len() as f64;
             let (time, _, _) = median_min_max(sel.iter().map(|p| p.time).collect());
             CurvePoint {
@@ -217,9 +209,9 @@ pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
 }
 
 /// The seeds a strategy was rendered with on `backend`, in order.
-fn seeds(points: &[Point], backend: &str, strategy: &str) -> Vec<u32> {
+fn seeds(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<u32> {
     let mut seeds: Vec<u32> =
-        points.iter().filter(|p| p.backend == backend && p.strategy == strategy).map(|p| p.seed).collect();
+        points.iter().filter(|p| p.backend == *backend && p.strategy == strategy).map(|p| p.seed).collect();
     seeds.sort_unstable();
     seeds.dedup();
     seeds
@@ -227,12 +219,12 @@ fn seeds(points: &[Point], backend: &str, strategy: &str) -> Vec<u32> {
 
 /// Each seed's time to relMSE `target` along its own curve, with the seed
 /// (seeds that do not reach it are left out).
-fn times_by_seed(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<(u32, f64)> {
+fn times_by_seed(points: &[Point], backend: &BenchBackend, strategy: &str, target: f64) -> Vec<(u32, f64)> {
     seeds(points, backend, strategy)
         .iter()
         .filter_map(|&seed| {
             let mut curve: Vec<&Point> =
-                points.iter().filter(|p| p.backend == backend && p.strategy == strategy && p.seed == seed).collect();
+                points.iter().filter(|p| p.backend == *backend && p.strategy == strategy && p.seed == seed).collect();
             curve.sort_by_key(|p| p.spp);
             time_to(&curve.iter().map(|p| (p.time, p.rel_mse)).collect::<Vec<_>>(), target).map(|t| (seed, t))
         })
@@ -241,7 +233,7 @@ fn times_by_seed(points: &[Point], backend: &str, strategy: &str, target: f64) -
 
 /// Each seed's time to relMSE `target` along its own curve (seeds that do
 /// not reach it are left out): the spread of a strategy's time.
-pub fn seed_times_to(points: &[Point], backend: &str, strategy: &str, target: f64) -> Vec<f64> {
+pub fn seed_times_to(points: &[Point], backend: &BenchBackend, strategy: &str, target: f64) -> Vec<f64> {
     times_by_seed(points, backend, strategy, target).into_iter().map(|(_, t)| t).collect()
 }
 
@@ -256,7 +248,7 @@ pub struct FasterThanDefault {
 }
 
 /// The strategies on `backend` that reached relMSE `target` sooner than
-/// the default ([`STRATEGIES`]`[0]`) in every one of the default's seeds,
+/// the default ([`StrategyId::Default`]) in every one of the default's seeds,
 /// and the number of those seeds; `None` with fewer than two.
 ///
 /// Each seed renders every strategy in turn, so a strategy's run and the
@@ -266,14 +258,19 @@ pub struct FasterThanDefault {
 /// of a pair half of the time, and in all `n` pairs with probability 1/2^n
 /// (a sign test): with 5 seeds, 0.031. The fastest median alone can be
 /// such a strategy when two do the same work.
-pub fn faster_than_default(points: &[Point], backend: &str, target: f64) -> Option<(u32, Vec<FasterThanDefault>)> {
-    let default = times_by_seed(points, backend, STRATEGIES[0].name, target);
-    let n = seeds(points, backend, STRATEGIES[0].name).len();
+pub fn faster_than_default(
+    points: &[Point],
+    backend: &BenchBackend,
+    target: f64,
+) -> Option<(u32, Vec<FasterThanDefault>)> {
+    let default = times_by_seed(points, backend, StrategyId::Default.name(), target);
+    let n = seeds(points, backend, StrategyId::Default.name()).len();
     if n < 2 {
         return None;
     }
-    let faster = STRATEGIES[1..]
+    let faster = STRATEGIES
         .iter()
+        .filter(|st| st.id != StrategyId::Default)
         .filter_map(|st| {
             let times = times_by_seed(points, backend, st.name, target);
             let ratios: Vec<f64> = default

@@ -21,9 +21,98 @@ pub use throughput::*;
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
 use pt_render::scene::DEFAULT_RR_START;
 
+/// Which backend a measurement ran on.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum BackendKind {
+    /// The kernel on a GPU adapter (lavapipe counts as one).
+    Gpu,
+    /// The CPU renderer.
+    Cpu,
+}
+
+impl BackendKind {
+    /// "GPU" or "CPU", as the report's prose names the backend.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Gpu => "GPU",
+            Self::Cpu => "CPU",
+        }
+    }
+}
+
+/// A backend as the report's tables name it: its kind and what ran there
+/// (the adapter, the thread count, the kernel and shape).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BenchBackend {
+    /// GPU or CPU.
+    pub kind: BackendKind,
+    /// The adapter's name or the thread count, and for throughput rows the
+    /// kernel and workgroup shape.
+    pub detail: String,
+}
+
+impl BenchBackend {
+    /// A GPU backend.
+    pub fn gpu(detail: impl Into<String>) -> Self {
+        Self { kind: BackendKind::Gpu, detail: detail.into() }
+    }
+
+    /// The CPU backend with rayon's thread count.
+    pub fn cpu() -> Self {
+        Self { kind: BackendKind::Cpu, detail: format!("{} threads", rayon::current_num_threads()) }
+    }
+}
+
+impl std::fmt::Display for BenchBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.kind.label(), self.detail)
+    }
+}
+
+/// The strategies compared, by what each changes from the default.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum StrategyId {
+    /// The default configuration.
+    Default,
+    /// Independent PCG samples instead of Sobol.
+    Independent,
+    /// Russian roulette from bounce 3.
+    RrFrom3,
+    /// Russian roulette from bounce 3, survival by luminance.
+    RrFrom3Luminance,
+    /// Russian roulette from bounce 1.
+    RrFrom1,
+    /// NEE with MIS.
+    NeeMis,
+    /// BSDF sampling alone.
+    BsdfOnly,
+    /// The cosine lobe alone.
+    CosineOnly,
+    /// 16 samples per pixel per frame.
+    Spp16,
+    /// 4 samples per pixel per frame.
+    Spp4,
+    /// Sobol points for every draw of a path.
+    SobolEverywhere,
+}
+
+impl StrategyId {
+    /// Its strategy in [`STRATEGIES`].
+    pub fn strategy(self) -> &'static Strategy {
+        STRATEGIES.iter().find(|s| s.id == self).expect("every id has a strategy")
+    }
+
+    /// Its strategy's label.
+    pub fn name(self) -> &'static str {
+        self.strategy().name
+    }
+}
+
 /// A sampling strategy compared for convergence.
 #[derive(Clone, Copy)]
 pub struct Strategy {
+    /// Which one.
+    pub id: StrategyId,
     /// Label.
     pub name: &'static str,
     /// Integrator flags.
@@ -53,51 +142,77 @@ const _: () = assert!(
 /// other changes one thing.
 pub const STRATEGIES: [Strategy; 11] = [
     Strategy {
+        id: StrategyId::Default,
         name: "default: Sobol (first 5 draws), NEE (no MIS), glow lobe, RR from 5, 64 spp/frame",
         flags: FLAGS_DEFAULT,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
+        id: StrategyId::Independent,
         name: "independent samples (PCG)",
         flags: FLAGS_DEFAULT & !FLAG_SOBOL,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
+        id: StrategyId::RrFrom3,
         name: "RR from 3, survival = max component",
         flags: FLAGS_DEFAULT,
         rr_start: 3,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
+        id: StrategyId::RrFrom3Luminance,
         name: "RR from 3, survival = luminance",
         flags: FLAGS_DEFAULT | FLAG_RR_LUMINANCE,
         rr_start: 3,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
-    Strategy { name: "RR from 1", flags: FLAGS_DEFAULT, rr_start: 1, spp_per_frame: DEFAULT_SPP_PER_FRAME },
     Strategy {
+        id: StrategyId::RrFrom1,
+        name: "RR from 1",
+        flags: FLAGS_DEFAULT,
+        rr_start: 1,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::NeeMis,
         name: "NEE with MIS",
         flags: FLAGS_DEFAULT | FLAG_MIS,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
+        id: StrategyId::BsdfOnly,
         name: "BSDF sampling only (no NEE)",
         flags: FLAGS_DEFAULT & !(FLAG_NEE | FLAG_MIS),
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
+        id: StrategyId::CosineOnly,
         name: "cosine lobe only (no glow lobe)",
         flags: FLAGS_DEFAULT & !FLAG_GLOW,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
-    Strategy { name: "16 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 16 },
-    Strategy { name: "4 spp/frame", flags: FLAGS_DEFAULT, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
     Strategy {
+        id: StrategyId::Spp16,
+        name: "16 spp/frame",
+        flags: FLAGS_DEFAULT,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 16,
+    },
+    Strategy {
+        id: StrategyId::Spp4,
+        name: "4 spp/frame",
+        flags: FLAGS_DEFAULT,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: 4,
+    },
+    Strategy {
+        id: StrategyId::SobolEverywhere,
         name: "Sobol for every draw",
         flags: FLAGS_DEFAULT | FLAG_SOBOL_DEEP,
         rr_start: DEFAULT_RR_START,
@@ -116,7 +231,16 @@ mod tests {
     use super::*;
 
     fn point(strategy: &str, seed: u32, spp: u32, time: f64, rel_mse: f64) -> Point {
-        Point { backend: "b".into(), strategy: strategy.into(), seed, spp, time, rel_mse, mape: 0.0, rmse: 0.0 }
+        Point {
+            backend: BenchBackend::gpu("b"),
+            strategy: strategy.into(),
+            seed,
+            spp,
+            time,
+            rel_mse,
+            mape: 0.0,
+            rmse: 0.0,
+        }
     }
 
     #[test]
@@ -133,7 +257,7 @@ mod tests {
             point("s", 3, 16, 2.0, 2e-3),
             point("other", 1, 8, 0.1, 1e-5),
         ];
-        let t = seed_times_to(&pts, "b", "s", 1e-3);
+        let t = seed_times_to(&pts, &BenchBackend::gpu("b"), "s", 1e-3);
         assert_eq!(t.len(), 2);
         assert!((t[0] - 2f64.sqrt()).abs() < 1e-12 && (t[1] - 3.0).abs() < 1e-12, "{t:?}");
     }
@@ -174,7 +298,7 @@ mod tests {
                 pts.push(point(STRATEGIES[k].name, seed as u32, 8, r.max(1.0) * 2.0, e1));
             }
         }
-        let (n, faster) = faster_than_default(&pts, "b", 1e-3).expect("three seeds");
+        let (n, faster) = faster_than_default(&pts, &BenchBackend::gpu("b"), 1e-3).expect("three seeds");
         assert_eq!(n, 3);
         assert_eq!(faster.len(), 1, "{faster:?}");
         assert_eq!(faster[0].name, STRATEGIES[1].name);
@@ -188,10 +312,10 @@ mod tests {
         );
         // Without the independent samples: none. With one seed: no verdict.
         pts.retain(|p| p.strategy != STRATEGIES[1].name);
-        assert_eq!(faster_than_default(&pts, "b", 1e-3), Some((3, Vec::new())));
+        assert_eq!(faster_than_default(&pts, &BenchBackend::gpu("b"), 1e-3), Some((3, Vec::new())));
         assert!(convergence_markdown(&pts, 1e-3, 8, 1).contains("= 0.125): none."));
         pts.retain(|p| p.seed == 0);
-        assert_eq!(faster_than_default(&pts, "b", 1e-3), None);
+        assert_eq!(faster_than_default(&pts, &BenchBackend::gpu("b"), 1e-3), None);
         assert!(!convergence_markdown(&pts, 1e-3, 8, 1).contains("Faster than the default"));
     }
 }

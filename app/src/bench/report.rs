@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use super::STRATEGIES;
 use super::convergence::*;
+use super::{BenchBackend, STRATEGIES, StrategyId};
 
 /// The convergence table in markdown, per backend, with the fastest
 /// strategy to relMSE `target` named, those it does not beat by more than
@@ -14,8 +14,7 @@ use super::convergence::*;
 /// those faster than the default in every seed ([`faster_than_default`]).
 pub fn convergence_markdown(points: &[Point], target: f64, max_spp: u32, pixels: u64) -> String {
     let mut s = String::new();
-    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
-    backends.dedup();
+    let backends = backends_of(points);
     for b in &backends {
         // Each strategy's curve, and the range of its seeds' times to `target`.
         let range = |name: &str| {
@@ -130,12 +129,11 @@ pub fn plot(path: &Path, points: &[Point], extra: &[(String, Vec<(f64, f64)>)]) 
     plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT)
         .map_err(|_| anyhow::anyhow!("cannot load the plot font"))?;
     let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
-    backends.dedup();
+    let backends = backends_of(points);
     for b in &backends {
         for st in &STRATEGIES {
             let c = mean_curve(points, b, st.name);
-            let short = if b.starts_with("GPU") { "GPU" } else { "CPU" };
+            let short = b.kind.label();
             series.push((format!("{short}: {}", st.name), time_error(&c)));
         }
     }
@@ -203,15 +201,15 @@ relMSE 1e-3 are interpolated log-log.\n\n";
 /// shorter) each alternative took to relMSE 1e-3 than the default, per
 /// backend, from `points`.
 pub(crate) fn defaults_section(points: &[Point]) -> String {
-    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
-    backends.dedup();
-    let time = |backend: &str, strategy: &str| time_to(&time_error(&mean_curve(points, backend, strategy)), 1e-3);
+    let backends = backends_of(points);
+    let time =
+        |backend: &BenchBackend, strategy: &str| time_to(&time_error(&mean_curve(points, backend, strategy)), 1e-3);
     // "GPU ... 2.05x, CPU ... 1.91x": time of `a` over time of `b`.
     let ratio = |a: &str, b: &str| {
         backends
             .iter()
             .map(|backend| {
-                let label = backend.split(':').next().unwrap_or(backend);
+                let label = backend.kind.label();
                 match (time(backend, a), time(backend, b)) {
                     (Some(x), Some(y)) => format!("{label} {:.2}x", x / y),
                     _ => format!("{label}: not reached within the budget"),
@@ -220,13 +218,13 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let default = STRATEGIES[0].name;
-    let vs_default = |i: usize| ratio(STRATEGIES[i].name, default);
+    let default = StrategyId::Default.name();
+    let vs_default = |id: StrategyId| ratio(id.name(), default);
     // "GPU: none; CPU: none": the alternatives faster in every seed.
     let verdict = backends
         .iter()
         .filter_map(|backend| {
-            let label = backend.split(':').next().unwrap_or(backend);
+            let label = backend.kind.label();
             let (n, faster) = faster_than_default(points, backend, 1e-3)?;
             let names: Vec<&str> = faster.iter().map(|f| f.name).collect();
             Some(format!(
@@ -292,16 +290,16 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          8-wide SIMD (4 wide rows leave half of each vector empty). On an H100 (PERFORMANCE-H100.md) 8x8, \
          16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \
          workgroup fills half of a 32-wide warp.\n",
-        vs_default(1),
-        vs_default(10),
-        vs_default(2),
-        vs_default(4),
-        ratio(STRATEGIES[3].name, STRATEGIES[2].name),
-        vs_default(8),
-        vs_default(9),
-        vs_default(5),
-        vs_default(6),
-        vs_default(7),
+        vs_default(StrategyId::Independent),
+        vs_default(StrategyId::SobolEverywhere),
+        vs_default(StrategyId::RrFrom3),
+        vs_default(StrategyId::RrFrom1),
+        ratio(StrategyId::RrFrom3Luminance.name(), StrategyId::RrFrom3.name()),
+        vs_default(StrategyId::Spp16),
+        vs_default(StrategyId::Spp4),
+        vs_default(StrategyId::NeeMis),
+        vs_default(StrategyId::BsdfOnly),
+        vs_default(StrategyId::CosineOnly),
     )
 }
 
@@ -342,10 +340,9 @@ pub(crate) fn mitsuba_section(csv: &PathBuf, points: &[Point]) -> Result<String>
         csv.display(),
         tm.map_or("not reached".into(), |t| format!("{t:.3} s"))
     ));
-    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
-    backends.dedup();
+    let backends = backends_of(points);
     for b in backends {
-        let t = time_to(&time_error(&mean_curve(points, &b, STRATEGIES[0].name)), 1e-3);
+        let t = time_to(&time_error(&mean_curve(points, &b, StrategyId::Default.name())), 1e-3);
         s.push_str(&format!(
             "| pathtracer {b}, default strategy | {} | {} |\n",
             t.map_or("not reached".into(), |t| format!("{t:.3} s")),

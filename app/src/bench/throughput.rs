@@ -10,7 +10,7 @@ use pt_render::scene::DEFAULT_RR_START;
 use pt_render::{CpuRenderer, RenderSettings, Scene};
 use rayon::prelude::*;
 
-use super::median_min_max;
+use super::{BenchBackend, median_min_max};
 
 /// A throughput configuration.
 pub struct ThroughputConfig {
@@ -94,8 +94,8 @@ pub const THROUGHPUT_CONFIGS: [ThroughputConfig; 6] = [
 pub struct ThroughputRow {
     /// Configuration label.
     pub config: String,
-    /// "GPU (adapter)" or "CPU (n threads)".
-    pub backend: String,
+    /// Where it ran.
+    pub backend: BenchBackend,
     /// Median frames per second, with min and max over repetitions.
     pub fps: (f64, f64, f64),
     /// Camera samples per second at the median.
@@ -159,7 +159,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
             }
             for setup in setups {
                 let (times, timestamps, label) = time_gpu(ctx, params, scene, cfg.spp, reps, setup)?;
-                let backend = format!("GPU: {}, {label}", ctx.adapter_info.name);
+                let backend = BenchBackend::gpu(format!("{}, {label}", ctx.adapter_info.name));
                 rows.push(row(cfg, backend, times, samples, rps, timestamps));
             }
         }
@@ -171,7 +171,7 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
             cpu.render_frame(cfg.spp);
             times.push(start.elapsed().as_secs_f64());
         }
-        rows.push(row(cfg, format!("CPU: {} threads", rayon::current_num_threads()), times, samples, rps, false));
+        rows.push(row(cfg, BenchBackend::cpu(), times, samples, rps, false));
     }
     Ok(rows)
 }
@@ -248,7 +248,7 @@ fn time_gpu(
 
 fn row(
     cfg: &ThroughputConfig,
-    backend: String,
+    backend: BenchBackend,
     times: Vec<f64>,
     samples: f64,
     rps: f64,

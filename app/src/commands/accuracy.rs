@@ -7,7 +7,8 @@ use crate::{AccuracyArgs, SuiteBackends};
 
 /// Runs the suite, prints its table and writes the report when asked.
 pub(crate) fn run(args: &AccuracyArgs) -> Result<()> {
-    use pt_render::accuracy::{self, Size, Target};
+    use pt_render::Device;
+    use pt_render::accuracy::{self, Size};
     let size = if args.full { Size::Full } else { Size::Quick };
     let ctx = match args.backend {
         SuiteBackends::Cpu => None,
@@ -15,10 +16,10 @@ pub(crate) fn run(args: &AccuracyArgs) -> Result<()> {
     };
     let mut targets = Vec::new();
     if !matches!(args.backend, SuiteBackends::Gpu) {
-        targets.push(Target::Cpu);
+        targets.push(Device::Cpu);
     }
     if let Some(c) = &ctx {
-        targets.push(Target::Gpu(c));
+        targets.push(Device::Gpu(c));
     }
     let start = std::time::Instant::now();
     let results = accuracy::run(&targets, size)?;

@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use pt_render::{RenderSettings, Scene, output};
 
 use super::{load_scene, machine_description, rayon_threads, spp_progress_bar};
-use crate::bench::{self, defaults_section, gpu_machine_section, mitsuba_section, relative_to_report};
+use crate::bench::{self, BackendKind, defaults_section, gpu_machine_section, mitsuba_section, relative_to_report};
 use crate::{BenchArgs, BenchWhat, SuiteBackends};
 
 /// Runs the benchmarks asked for and writes the report when asked.
@@ -23,7 +23,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         eprintln!("throughput: {} configurations x {} repetitions", bench::THROUGHPUT_CONFIGS.len(), args.reps);
         let mut rows = bench::throughput(gpu, args.reps as usize, &default_scene)?;
         if !cpu_too {
-            rows.retain(|r| !r.backend.starts_with("CPU"));
+            rows.retain(|r| r.backend.kind != BackendKind::Cpu);
         }
         let table = bench::throughput_markdown(&rows);
         println!("{table}");
@@ -64,7 +64,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
             eprintln!("convergence: {s}")
         })?;
         if !cpu_too {
-            points.retain(|p| !p.backend.starts_with("CPU"));
+            points.retain(|p| p.backend.kind != BackendKind::Cpu);
         }
         let csv = args.out_dir.join("convergence.csv");
         bench::write_csv(&csv, &points)?;

@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
 use pt_render::output::{self, OutputFormat};
 use pt_render::renderer::render_progressive;
-use pt_render::{Backend, RenderSettings, Renderer};
+use pt_render::{Device, GpuContext, RenderSettings, Renderer};
 
 use super::{load_scene, spp_progress_bar};
 use crate::{BackendArg, RenderArgs, SamplerArg, TonemapArg};
@@ -37,15 +37,23 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
     }
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
-    let mut renderer = match args.backend {
-        BackendArg::Gpu => {
-            Renderer::new(Backend::Gpu, params, &walls, &spheres).context("cannot start the GPU renderer")?
+    // The context outlives the renderer made on it.
+    let ctx = match args.backend {
+        BackendArg::Gpu => Some(GpuContext::new().context("cannot start the GPU renderer")?),
+        BackendArg::Cpu => None,
+        BackendArg::Auto => {
+            GpuContext::new().inspect_err(|e| eprintln!("GPU unavailable ({e}); rendering on the CPU")).ok()
         }
-        BackendArg::Cpu => Renderer::new(Backend::Cpu, params, &walls, &spheres)?,
-        BackendArg::Auto => Renderer::new(Backend::Gpu, params, &walls, &spheres).or_else(|e| {
+    };
+    let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
+    let mut renderer = match (args.backend, Renderer::new(device, params, &walls, &spheres)) {
+        (_, Ok(r)) => r,
+        (BackendArg::Auto, Err(e)) if ctx.is_some() => {
             eprintln!("GPU unavailable ({e}); rendering on the CPU");
-            Renderer::new(Backend::Cpu, params, &walls, &spheres)
-        })?,
+            Renderer::new(Device::Cpu, params, &walls, &spheres)?
+        }
+        (BackendArg::Gpu, Err(e)) => return Err(e).context("cannot start the GPU renderer"),
+        (_, Err(e)) => return Err(e.into()),
     };
     eprintln!("{}", renderer.description());
     eprintln!(

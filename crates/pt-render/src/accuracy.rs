@@ -22,9 +22,9 @@ use pt_core::wall::intersect_wall;
 use pt_core::{FrameParams, Ray, Sphere, SphereLight, Wall, light, query};
 use rayon::prelude::*;
 
-use crate::gpu::{GpuContext, GpuError};
+use crate::gpu::GpuError;
 use crate::metrics::{mean_and_stderr, region_means};
-use crate::renderer::render_accum;
+use crate::renderer::{Device, render_accum};
 use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
 use crate::stats::{SphereBins, chi2_test};
 
@@ -101,31 +101,6 @@ pub enum Size {
     Full,
 }
 
-/// The backend a case renders on.
-pub enum Target<'a> {
-    /// The CPU renderer.
-    Cpu,
-    /// The GPU renderer on this context.
-    Gpu(&'a GpuContext),
-}
-
-impl Target<'_> {
-    fn name(&self) -> &'static str {
-        match self {
-            Target::Cpu => "cpu",
-            Target::Gpu(_) => "gpu",
-        }
-    }
-
-    /// The context `render_accum` renders on: none for the CPU.
-    fn ctx(&self) -> Option<&GpuContext> {
-        match self {
-            Target::Cpu => None,
-            Target::Gpu(ctx) => Some(*ctx),
-        }
-    }
-}
-
 /// Mean over seeds of a per-image statistic, with its standard error.
 #[derive(Clone, Debug, Default)]
 pub struct Measurement {
@@ -163,12 +138,12 @@ impl Setup {
     }
 
     /// Per-seed images (mean radiance per pixel) and the non-finite count.
-    fn images(&self, t: &Target, seeds: std::ops::Range<u32>) -> Result<(Vec<Image>, u64), GpuError> {
+    fn images(&self, t: &Device<'_>, seeds: std::ops::Range<u32>) -> Result<(Vec<Image>, u64), GpuError> {
         let mut images = Vec::new();
         let mut bad = 0;
         for seed in seeds {
             let (walls, spheres) = (self.scene.gpu_walls(), self.scene.gpu_spheres());
-            let accum = render_accum(t.ctx(), self.params(seed), &walls, &spheres, self.settings.spp, 256)?;
+            let accum = render_accum(*t, self.params(seed), &walls, &spheres, self.settings.spp, 256)?;
             bad += accum.iter().map(|p| p.non_finite as u64).sum::<u64>();
             images.push(accum.iter().map(|p| p.mean().to_array()).collect());
         }
@@ -176,7 +151,7 @@ impl Setup {
     }
 
     /// Mean of channel-averaged radiance over all pixels, across seeds.
-    fn measure(&self, t: &Target) -> Result<Measurement, GpuError> {
+    fn measure(&self, t: &Device<'_>) -> Result<Measurement, GpuError> {
         let (images, non_finite) = self.images(t, 0..SEEDS)?;
         let per_seed: Vec<f64> = images
             .iter()
@@ -269,7 +244,7 @@ fn probe(scene: Scene, x: Vec3, n: Vec3, h: f32) -> Scene {
 }
 
 /// Runs the whole suite on `targets`.
-pub fn run(targets: &[Target], size: Size) -> Result<Vec<CaseResult>, GpuError> {
+pub fn run(targets: &[Device<'_>], size: Size) -> Result<Vec<CaseResult>, GpuError> {
     let mut out = Vec::new();
     for t in targets {
         analytic_scenes(t, &mut out)?;
@@ -294,7 +269,7 @@ fn sphere_room(rho: f32, s: f32, radiance: f32, max_bounces: u32) -> Setup {
     Setup::new(scene, 8, 8, 64, max_bounces)
 }
 
-fn analytic_scenes(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn analytic_scenes(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     const UNLIMITED: u32 = 1_000_000;
     for (rho, s, bounces) in [(0.5f32, 0.1f32, UNLIMITED), (0.5, 0.1, 1), (0.95, 0.3, UNLIMITED), (0.0, 0.2, UNLIMITED)]
     {
@@ -338,7 +313,7 @@ fn regimes(sigma: f64) -> [(&'static str, f64); 3] {
 
 /// Irradiance on a plane from a sphere light, rendered: a floor of albedo 1
 /// seen by a probe, one bounce, so the probe reads E / pi.
-fn irradiance_probes(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn irradiance_probes(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     for sin_sigma in [0.01f64, 0.5, 0.999] {
         for (regime, theta) in regimes(sin_sigma.asin()) {
             let d = 2.0f32;
@@ -397,7 +372,7 @@ fn irradiance_estimator(out: &mut Vec<CaseResult>) {
 /// of radiance 1: the floor at distance D from the centre shows
 /// 1 - (R / D)^3 (the sphere hides pi sin^2 a cos b of the sky, with sin a
 /// = cos b = R / D), one bounce. No leak and no extra dark ring.
-fn contact(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn contact(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     for rho in [0.05f32, 0.2, 0.5, 1.0, 2.0] {
         let mut scene =
             empty_scene(CameraDesc { position: Vec3::ONE, look_at: Vec3::ZERO, up: Vec3::Y, vfov_degrees: 1.0 });
@@ -452,7 +427,7 @@ fn default_small() -> Setup {
     Setup::new(Scene::default_scene(), 24, 24, 16, 5)
 }
 
-fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
     let variants: [Variant; 9] = [
@@ -477,7 +452,7 @@ fn equal_expectations(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuEr
 /// The region z-test of `setup`'s images (seeds from `first_seed`) against
 /// the reference images of the small default scene.
 fn same_image_case(
-    t: &Target,
+    t: &Device<'_>,
     name: &str,
     reference: (&[Image], u64),
     setup: &Setup,
@@ -515,7 +490,7 @@ fn transformed(scale: f32, offset: Vec3) -> Scene {
     s
 }
 
-fn metamorphic(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn metamorphic(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
     for (name, scene) in [
@@ -553,7 +528,7 @@ fn metamorphic(t: &Target, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
 /// is still right: relative error under 1e-5 against an f64 sum of the
 /// same samples. The samples are the background seen by camera rays in an
 /// empty scene, 0.1 per channel: not representable in binary.
-fn accumulation(t: &Target, size: Size, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
+fn accumulation(t: &Device<'_>, size: Size, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let spp: u32 = if size == Size::Full { 1 << 25 } else { 1 << 24 };
     let mut scene = empty_scene(camera(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 40.0));
     scene.background = Vec3::splat(0.1);
@@ -561,7 +536,7 @@ fn accumulation(t: &Target, size: Size, out: &mut Vec<CaseResult>) -> Result<(),
     // The case is about the sum, not the samples: independent ones are the
     // cheapest to draw 2^25 times on one GPU invocation.
     setup.flags &= !FLAG_SOBOL;
-    let accum = render_accum(t.ctx(), setup.params(0), &[], &[], spp, 1 << 16)?;
+    let accum = render_accum(*t, setup.params(0), &[], &[], spp, 1 << 16)?;
     let p = accum[0];
     let expected = 0.1f32 as f64;
     let measured = p.mean().x as f64;

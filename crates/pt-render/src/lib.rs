@@ -11,6 +11,6 @@ pub mod scene;
 
 pub use cpu::CpuRenderer;
 pub use gpu::{GpuContext, GpuError, GpuRenderer, KERNEL_SPV};
-pub use renderer::{Backend, Renderer};
+pub use renderer::{Device, Renderer};
 pub use scene::{RenderSettings, Scene, SceneError};
 pub mod stats;

@@ -8,42 +8,64 @@ use pt_core::{AccumPixel, FrameParams, Sphere, Wall};
 use crate::cpu::CpuRenderer;
 use crate::gpu::{GpuContext, GpuError, GpuRenderer};
 
-/// Which renderer traces the paths.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// The rust-gpu kernel through wgpu.
-    Gpu,
+/// Where paths are traced: the rust-gpu kernel on a GPU context (shared by
+/// every renderer made on it: the kernel is compiled once per context), or
+/// the same code on the CPU. Every command, the viewer's tests, the
+/// accuracy suite and the benchmarks choose their backend with this.
+#[derive(Copy, Clone)]
+pub enum Device<'a> {
+    /// The rust-gpu kernel through wgpu, on this context.
+    Gpu(&'a GpuContext),
     /// The same code on the CPU, parallel with rayon.
     Cpu,
 }
 
-/// A progressive renderer on either backend.
-pub enum Renderer {
-    /// GPU backend with its context.
-    Gpu(Box<GpuContext>, Box<GpuRenderer>),
-    /// CPU backend.
-    Cpu(Box<CpuRenderer>),
-}
-
-impl Renderer {
-    /// A renderer on `backend` with an empty accumulation.
-    pub fn new(backend: Backend, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
-        Ok(match backend {
-            Backend::Gpu => {
-                let ctx = GpuContext::new()?;
-                let r = GpuRenderer::new(&ctx, params, walls, spheres)?;
-                Renderer::Gpu(Box::new(ctx), Box::new(r))
-            }
-            Backend::Cpu => Renderer::Cpu(Box::new(CpuRenderer::new(params, walls, spheres)?)),
-        })
+impl Device<'_> {
+    /// "gpu" or "cpu", for case names and file names.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Device::Gpu(_) => "gpu",
+            Device::Cpu => "cpu",
+        }
     }
 
     /// What renders: the adapter for the GPU, the thread count for the CPU.
     pub fn description(&self) -> String {
         match self {
-            Renderer::Gpu(ctx, _) => format!("GPU: {}", ctx.adapter_description()),
-            Renderer::Cpu(_) => format!("CPU: {} threads", rayon::current_num_threads()),
+            Device::Gpu(ctx) => format!("GPU: {}", ctx.adapter_description()),
+            Device::Cpu => format!("CPU: {} threads", rayon::current_num_threads()),
         }
+    }
+}
+
+/// A progressive renderer on either backend.
+pub enum Renderer<'a> {
+    /// GPU backend on a shared context.
+    Gpu(&'a GpuContext, Box<GpuRenderer>),
+    /// CPU backend.
+    Cpu(Box<CpuRenderer>),
+}
+
+impl<'a> Renderer<'a> {
+    /// A renderer on `device` with an empty accumulation.
+    pub fn new(device: Device<'a>, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
+        Ok(match device {
+            Device::Gpu(ctx) => Renderer::Gpu(ctx, Box::new(GpuRenderer::new(ctx, params, walls, spheres)?)),
+            Device::Cpu => Renderer::Cpu(Box::new(CpuRenderer::new(params, walls, spheres)?)),
+        })
+    }
+
+    /// The device it renders on.
+    pub fn device(&self) -> Device<'a> {
+        match self {
+            Renderer::Gpu(ctx, _) => Device::Gpu(ctx),
+            Renderer::Cpu(_) => Device::Cpu,
+        }
+    }
+
+    /// What renders: the adapter for the GPU, the thread count for the CPU.
+    pub fn description(&self) -> String {
+        self.device().description()
     }
 
     /// The parameters in use.
@@ -113,7 +135,7 @@ impl RenderStats {
 /// calling `progress(samples done)` after each synchronised batch. Returns
 /// the accumulation and the figures.
 pub fn render_progressive(
-    renderer: &mut Renderer,
+    renderer: &mut Renderer<'_>,
     spp: u32,
     per_frame: u32,
     mut progress: impl FnMut(u32),
@@ -146,12 +168,11 @@ pub fn render_progressive(
     Ok((accum, stats))
 }
 
-/// Renders `spp` samples per pixel in frames of at most `per_frame`, on
-/// the GPU of `ctx` or, without one, on the CPU, and returns the
-/// accumulation: a whole render for tests and the accuracy suite, on a
-/// context they share (pipelines are compiled once per context).
+/// Renders `spp` samples per pixel in frames of at most `per_frame` on
+/// `device` and returns the accumulation: a whole render for tests and the
+/// accuracy suite.
 pub fn render_accum(
-    ctx: Option<&GpuContext>,
+    device: Device<'_>,
     params: FrameParams,
     walls: &[Wall],
     spheres: &[Sphere],
@@ -159,18 +180,10 @@ pub fn render_accum(
     per_frame: u32,
 ) -> Result<Vec<AccumPixel>, GpuError> {
     let per_frame = per_frame.max(1);
-    let frames = (0..spp).step_by(per_frame as usize).map(|done| per_frame.min(spp - done));
-    match ctx {
-        Some(ctx) => {
-            let mut r = GpuRenderer::new(ctx, params, walls, spheres)?;
-            frames.for_each(|n| r.submit_frame(n));
-            ctx.wait()?;
-            r.read_accum(ctx)
-        }
-        None => {
-            let mut r = CpuRenderer::new(params, walls, spheres)?;
-            frames.for_each(|n| r.render_frame(n));
-            Ok(r.accum().to_vec())
-        }
+    let mut renderer = Renderer::new(device, params, walls, spheres)?;
+    for done in (0..spp).step_by(per_frame as usize) {
+        renderer.frame(per_frame.min(spp - done));
     }
+    renderer.wait()?;
+    renderer.accum()
 }
