@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::Result;
-use pt_core::{FrameParams, integrator};
+use pt_core::{FrameParams, instrument};
 use pt_render::gpu::{GpuContext, GpuRenderer, GpuTimer, TraceKernel, WORKGROUP_SHAPES};
 use pt_render::scene::DEFAULT_RR_START;
 use pt_render::{CpuRenderer, RenderSettings, Scene};
@@ -119,7 +119,7 @@ fn rays_per_sample(params: &FrameParams, scene: &Scene) -> Result<f64> {
             let mut r = 0u64;
             let mut n = 0u64;
             for x in (0..params.width).step_by(4) {
-                r += integrator::count_pixel_rays(x, y, params, &geometry);
+                r += instrument::count_pixel_rays(x, y, params, &geometry);
                 n += params.samples_per_frame as u64;
             }
             (r, n)

@@ -6,6 +6,7 @@ use spirv_std::glam::Vec3;
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::bsdf::Scatter;
 use crate::geometry::Geometry;
+use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
 use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams};
 use crate::query::{HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
@@ -18,35 +19,6 @@ use crate::small_scene::SmallScene;
 /// Minimum Russian roulette survival probability: a path is never killed
 /// with certainty, and its weight grows by at most 1/0.05 = 20.
 pub const RR_MIN_SURVIVAL: f32 = 0.05;
-
-/// Counts the rays a path traces (closest-hit and shadow rays), for the
-/// benchmark's rays per second. The renderers use [`NoRayCount`], which
-/// compiles to nothing.
-pub trait RayCounter {
-    /// One ray was traced.
-    fn ray(&mut self);
-}
-
-/// The counter that counts nothing.
-pub struct NoRayCount;
-
-impl RayCounter for NoRayCount {
-    #[inline]
-    fn ray(&mut self) {}
-}
-
-/// A counter of rays (CPU only: the kernel never counts).
-#[cfg(not(target_arch = "spirv"))]
-#[derive(Default)]
-pub struct RayCount(pub u64);
-
-#[cfg(not(target_arch = "spirv"))]
-impl RayCounter for RayCount {
-    #[inline]
-    fn ray(&mut self) {
-        self.0 += 1;
-    }
-}
 
 /// One path in flight: what the path loop carries from one segment to the
 /// next. [`Path::step`] traces one segment; a path is unbiased for
@@ -240,18 +212,9 @@ pub fn render_pixel_small<const W: u32, const S: u32>(
     pixel(x, y, params, geometry, &SmallScene::<W, S>::new(params, geometry), &mut NoRayCount)
 }
 
-/// Rays traced by the samples of pixel (`x`, `y`) in one frame: what
-/// [`render_pixel`] does, counting its rays (benchmarks).
-#[cfg(not(target_arch = "spirv"))]
-pub fn count_pixel_rays(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> u64 {
-    let mut count = RayCount::default();
-    pixel(x, y, params, geometry, geometry, &mut count);
-    count.0
-}
-
 /// [`render_pixel`] with its rays counted: the one place that picks the
 /// sampler.
-fn pixel<V: SceneView, C: RayCounter>(
+pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     x: u32,
     y: u32,
     params: &FrameParams,

@@ -10,6 +10,7 @@ pub mod accum;
 pub mod bsdf;
 pub mod camera;
 pub mod geometry;
+pub mod instrument;
 pub mod integrator;
 pub mod light;
 pub mod params;

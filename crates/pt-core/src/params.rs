@@ -15,22 +15,28 @@ pub const FLAG_MIS: u32 = 2;
 /// `flags` bit: samples from the Owen-scrambled Sobol sequence instead of
 /// independent PCG streams.
 pub const FLAG_SOBOL: u32 = 4;
-/// `flags` bit: Russian roulette survives with the throughput's luminance
-/// (Rec. 709 weights) instead of its largest component: shorter paths after
-/// strongly coloured bounces, at the price of more colour noise there.
-pub const FLAG_RR_LUMINANCE: u32 = 8;
 /// `flags` bit: BSDF sampling mixes the glow lobe around the light
 /// (`light::GlowLobe`) into the cosine lobe.
 pub const FLAG_GLOW: u32 = 16;
-/// `flags` bit, with `FLAG_SOBOL`: every draw of a path is a Sobol point,
-/// not only the first `sampler::SOBOL_DRAWS` (the default, which takes the
-/// later ones from a PCG stream).
-pub const FLAG_SOBOL_DEEP: u32 = 32;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS) and the glow lobe, on Owen-scrambled Sobol samples for the
 /// first draws of each path. MIS makes the same image in the default scene
 /// and costs more per sample.
 pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_SOBOL | FLAG_GLOW;
+
+// Comparison-only flags. `pathtracer bench` sets them to compare
+// alternatives with the default, and the accuracy suite to check that they
+// stay unbiased; no command-line option or viewer setting turns them on,
+// and the path loop reads each in one place.
+
+/// `flags` bit: Russian roulette survives with the throughput's luminance
+/// (Rec. 709 weights) instead of its largest component: shorter paths after
+/// strongly coloured bounces, at the price of more colour noise there.
+pub const FLAG_RR_LUMINANCE: u32 = 8;
+/// `flags` bit, with `FLAG_SOBOL`: every draw of a path is a Sobol point,
+/// not only the first `sampler::SOBOL_DRAWS` (the default, which takes the
+/// later ones from a PCG stream).
+pub const FLAG_SOBOL_DEEP: u32 = 32;
 
 /// `tonemap`: clamp to [0, 1] (no curve).
 pub const TONEMAP_CLAMP: u32 = 0;

@@ -120,12 +120,9 @@ fn to_unit(x: u32) -> f32 {
 /// glow lobe at the bright ceiling. Deeper, each pair is stratified alone
 /// but not jointly with the earlier ones, and gains little, while a Sobol
 /// draw costs 11 to 16 integer multiplies and two or three bit reversals
-/// against 2 to 4 multiplies for PCG. Measured on the CPU (256x256, 256
-/// spp, default scene, seeds 1 to 3; relMSE / samples per second, relative
-/// to Sobol at every depth): 3 draws 1.053 / 1.101, 4 draws 1.054 / 1.104,
-/// 5 draws 1.007 / 1.066, 7 draws 1.001 / 1.033. Five draws gave the lowest
-/// relMSE x time (5.5% below Sobol everywhere); `pathtracer bench` compares
-/// the two (`FLAG_SOBOL_DEEP`).
+/// against 2 to 4 multiplies for PCG. Five draws gave the lowest relMSE x
+/// time of the counts measured (CHANGELOG.md has the figures);
+/// `pathtracer bench` compares it with Sobol everywhere (`FLAG_SOBOL_DEEP`).
 pub const SOBOL_DRAWS: u32 = 5;
 
 /// Padded 2D Owen-scrambled Sobol samples for one camera sample, for its

@@ -80,6 +80,8 @@ macro_rules! accumulate_entry {
 // WebGPU backend goes through, appends `_` to a name that ends in a digit,
 // and the pipeline would then not find its entry point.
 accumulate_entry!(accumulate, 8, 8);
+// Benchmark-only: the same kernel in other workgroup shapes, which
+// `pathtracer bench` times against 8 x 8 (the renderers never pick them).
 accumulate_entry!(accumulate_16x4_groups, 16, 4);
 accumulate_entry!(accumulate_32x2_groups, 32, 2);
 accumulate_entry!(accumulate_4x4_groups, 4, 4);

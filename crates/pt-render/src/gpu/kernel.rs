@@ -49,7 +49,8 @@ pub(super) fn small_scene_entry((walls, spheres): (u32, u32)) -> String {
 }
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
-/// (entry point, width, height). The first is the default.
+/// (entry point, width, height). The first is the default and the only one
+/// the renderers use; the others exist for `pathtracer bench` to time.
 pub const WORKGROUP_SHAPES: [(&str, u32, u32); 4] = [
     ("accumulate", 8, 8),
     ("accumulate_16x4_groups", 16, 4),
