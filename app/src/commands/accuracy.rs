@@ -64,12 +64,9 @@ means gives the standard error, and a case passes when |measured - expected| is 
 5.5 standard errors (t with 15 degrees of freedom: probability 1e-4 each, under 1% over a \
 run). Image comparisons (equal expectations, metamorphic) take the largest per-region |z| \
 over 8x8-pixel regions and channels of two sets of 16 seeds and accept up to 6 (family-wise \
-about 1%). Geometric checks count failures and accept none. Sampling tests are binned \
-chi-square tests (as Mitsuba 3's chi2.py: cells under 5 expected samples pooled), \
-Sidak-corrected to 1% over the five tests: cosine sampling over 20 x 40 equal-area cells of \
-the sphere with expected counts integrated from the pdf; light-cone sampling over 20 x 40 \
-equal-area cells of the cap in its own frame (exact expected counts; a sample outside the \
-cap fails the case). Expected values: \
+about 1%). Checks of pt-core alone (ray/sphere precision, self-intersection, \
+watertightness, chi-square tests of the samplers and the RNG) are pt-core's unit tests, \
+beside the code they check, and not repeated here. Expected values: \
 spherical room rho L s^2 / (1 - rho (1 - s^2)) (and its N-bounce partial sum); albedo times \
 background for a sphere under a uniform sky; the sphere-light irradiance of Snyder (1996) \
 with horizon clipping (checked against quadrature in a unit test); 1 - (R/D)^3 for a floor \

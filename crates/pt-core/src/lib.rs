@@ -24,6 +24,9 @@ pub mod sphere;
 pub mod tonemap;
 pub mod wall;
 
+#[cfg(test)]
+mod test_support;
+
 pub use spirv_std::glam;
 
 pub use accum::{AccumPixel, PixelSamples};

@@ -316,4 +316,62 @@ mod tests {
         assert_eq!(light_cone(&light, Vec3::new(0.5, 0.0, 0.0)).pdf(), 0.0);
         assert!(!light_cone(&light, Vec3::new(1.5, 0.0, 0.0)).is_empty());
     }
+
+    /// Case: 400,000 light-cone directions for lights of sin(a) = 0.05, 0.5
+    /// and 0.95, binned in their own frame in 20 bands of equal `1 - cos` by
+    /// 40 sectors (equal solid angles of the cap, so each cell expects the
+    /// same count), pass a chi-square test, and none falls outside the cap.
+    #[test]
+    fn cone_samples_pass_chi_square_and_stay_in_the_cap() {
+        use crate::test_support::chi2::chi2_test;
+        use crate::test_support::{cap_histogram, chi2_alpha};
+        let n = 400_000;
+        for sin_sigma in [0.05f32, 0.5, 0.95] {
+            let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
+            let cone = light_cone(&l, Vec3::ZERO);
+            let (nt, np) = (20usize, 40usize);
+            let observed = cap_histogram(n, cone.axis, cone.one_minus_cos_max as f64, (nt, np), |rng| {
+                cone.sample(rng.next_f32(), rng.next_f32()).0
+            });
+            assert_eq!(observed[nt * np], 0.0, "sin(a) = {sin_sigma}: samples outside the cap");
+            let r = chi2_test(&observed[..nt * np], &vec![n as f64 / (nt * np) as f64; nt * np]);
+            assert!(r.p_value >= chi2_alpha(), "sin(a) = {sin_sigma}: chi2 {:.1}, p = {:.2e}", r.chi2, r.p_value);
+        }
+    }
+
+    /// Case: 400,000 glow-lobe directions for lights of sin(a) = 0.5 and 0.2
+    /// (lobes that peak 3 and 8 times above their rims), binned in the
+    /// lobe's frame over `1 - cos` in [0, reach] in 20 x 20 cells, pass a
+    /// chi-square test against each band's integral of the lobe's own pdf
+    /// (a midpoint sum of 1000 steps), and none falls outside the lobe.
+    #[test]
+    fn glow_samples_pass_chi_square_against_their_pdf() {
+        use crate::test_support::chi2::chi2_test;
+        use crate::test_support::{cap_histogram, chi2_alpha};
+        use std::f64::consts::PI;
+        let n = 400_000;
+        for sin_sigma in [0.5f32, 0.2] {
+            let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
+            let lobe = GlowLobe::new(&light_cone(&l, Vec3::ZERO));
+            let (nt, np, sub) = (20usize, 20usize, 1000usize);
+            let (reach, axis) = (lobe.reach() as f64, lobe.axis().as_dvec3());
+            let side = crate::sampling::orthonormal_basis(lobe.axis()).0.as_dvec3();
+            let band_mass = |band: usize| {
+                (0..sub)
+                    .map(|i| {
+                        let x = reach * (band as f64 + (i as f64 + 0.5) / sub as f64) / nt as f64;
+                        let dir = side * (x * (2.0 - x)).sqrt() + axis * (1.0 - x);
+                        2.0 * PI * lobe.pdf(dir.as_vec3()) as f64 * reach / (nt * sub) as f64
+                    })
+                    .sum::<f64>()
+            };
+            let expected: Vec<f64> =
+                (0..nt).flat_map(|t| std::iter::repeat_n(n as f64 * band_mass(t) / np as f64, np)).collect();
+            let observed =
+                cap_histogram(n, lobe.axis(), reach, (nt, np), |rng| lobe.sample(rng.next_f32(), rng.next_f32()));
+            assert_eq!(observed[nt * np], 0.0, "sin(a) = {sin_sigma}: samples outside the lobe");
+            let r = chi2_test(&observed[..nt * np], &expected);
+            assert!(r.p_value >= chi2_alpha(), "sin(a) = {sin_sigma}: chi2 {:.1}, p = {:.2e}", r.chi2, r.p_value);
+        }
+    }
 }

@@ -142,4 +142,18 @@ mod tests {
         assert_ne!(base, first(10, 20, 30, 1, 0));
         assert_ne!(base, first(10, 20, 30, 0, 1));
     }
+
+    /// Case: 1,000,000 floats in 1000 equal bins pass a chi-square test.
+    #[test]
+    fn floats_pass_chi_square_in_a_thousand_bins() {
+        use crate::test_support::chi2::chi2_test;
+        use crate::test_support::chi2_alpha;
+        let mut rng = Rng::new(1, 2, 3, 4, 5);
+        let mut observed = vec![0.0; 1000];
+        for _ in 0..1_000_000 {
+            observed[(rng.next_f32() * 1000.0) as usize] += 1.0;
+        }
+        let r = chi2_test(&observed, &vec![1000.0; 1000]);
+        assert!(r.p_value >= chi2_alpha(), "chi2 {:.1}, p = {:.2e}", r.chi2, r.p_value);
+    }
 }

@@ -175,4 +175,35 @@ mod tests {
             assert!(hit < f32::MAX, "ray {i} escaped through the seam");
         }
     }
+
+    /// Case: self-intersection at scales 1e-3 to 1e4. A ray spawned from a
+    /// wall hit at the error-bounded offset never re-hits the wall, even
+    /// without the path loop's rule that skips the wall a ray leaves.
+    #[test]
+    fn spawned_rays_never_rehit_their_wall_at_any_scale() {
+        use crate::ray::offset_origin;
+        use crate::rng::Rng;
+        use crate::sampling::cosine_hemisphere;
+        use crate::test_support::SCALES;
+        for s in SCALES {
+            let mut rng = Rng::new(s.to_bits(), 7, 0, 0, 0);
+            let wall = Wall::new(
+                Vec3::new(-1.0, 0.2, 1.0) * s,
+                Vec3::new(2.0, 0.1, 0.0) * s,
+                Vec3::new(0.0, 0.3, -2.0) * s,
+                Vec3::ONE,
+            );
+            let o = Vec3::new(0.1, 2.0, -0.2) * s;
+            for i in 0..20_000 {
+                let aim = wall.corner + wall.edge_u * rng.next_f32() + wall.edge_v * rng.next_f32();
+                let ray = Ray { origin: o, dir: (aim - o).normalize() };
+                let t = intersect_wall(&wall, &ray, 0.0, f32::MAX);
+                assert!(t < f32::MAX, "scale {s}, ray {i}: a ray aimed at the wall missed it");
+                let n = if wall.normal.dot(ray.dir) < 0.0 { wall.normal } else { -wall.normal };
+                let origin = offset_origin(ray.at(t), n, ray.origin.abs() + (ray.dir * t).abs());
+                let refl = Ray { origin, dir: cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) };
+                assert_eq!(intersect_wall(&wall, &refl, 0.0, f32::MAX), f32::MAX, "scale {s}, ray {i}");
+            }
+        }
+    }
 }

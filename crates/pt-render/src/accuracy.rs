@@ -1,32 +1,28 @@
-//! The accuracy suite: analytic scenes, hard numerical cases and sampling
-//! tests, each with an expected value, a measurement, its standard error
-//! and a tolerance derived from it (`pathtracer accuracy`).
+//! The accuracy suite: renders of analytic scenes, image comparisons and the
+//! accumulation case on each backend, each with an expected value, a
+//! measurement, its standard error and a tolerance derived from it
+//! (`pathtracer accuracy`). Checks of pt-core alone (intersection
+//! precision, self-intersection, watertightness, chi-square tests of the
+//! samplers) are pt-core's unit tests.
 //!
 //! Monte Carlo cases render `SEEDS` independent images (distinct seeds);
 //! the spread of their means gives the standard error, and the tolerance is
 //! `Z_CRIT` standard errors. With 16 seeds the t statistic has 15 degrees
-//! of freedom, for which |t| > 5.5 has probability 1e-4: over the ~60 cases
-//! of a run a false failure has probability under 1%. Exact cases
-//! (geometry, accumulation) have tolerances from f32 rounding, stated per
-//! case.
+//! of freedom, for which |t| > 5.5 has probability 1e-4: over the cases
+//! of a run a false failure has probability under 1%. The
+//! accumulation case has a tolerance from f32 rounding, stated with it.
 
 use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
-use pt_core::ray::offset_origin;
 use pt_core::rng::Rng;
-use pt_core::sampling::cosine_hemisphere;
-use pt_core::sphere::{intersect_sphere, sphere_hit_point};
-use pt_core::wall::intersect_wall;
-use pt_core::{FrameParams, Ray, Sphere, SphereLight, Wall, light, query};
-use rayon::prelude::*;
+use pt_core::{FrameParams, Sphere, SphereLight, Wall, light};
 
 use crate::gpu::GpuError;
 use crate::metrics::{mean_and_stderr, region_means};
 use crate::renderer::{Device, render_accum};
 use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
-use crate::stats::{SphereBins, chi2_test};
 
 /// Independent renders per Monte Carlo case.
 pub const SEEDS: u32 = 16;
@@ -70,21 +66,6 @@ impl CaseResult {
         Self { case: case.into(), backend, expected, measured, stderr, tolerance, non_finite, pass }
     }
 
-    /// A chi-square test: the p-value must not fall below `alpha`, and
-    /// `also` must hold. `detail` goes into the case's name.
-    fn chi2(name: &str, detail: &str, r: &crate::stats::Chi2Result, alpha: f64, also: bool) -> Self {
-        Self {
-            case: format!("chi-square {name}: p-value (chi2 {:.1}, {} dof{detail}) >= {alpha:.2e}", r.chi2, r.dof),
-            backend: "core",
-            expected: 1.0,
-            measured: r.p_value,
-            stderr: 0.0,
-            tolerance: 1.0 - alpha,
-            non_finite: 0,
-            pass: r.p_value >= alpha && also,
-        }
-    }
-
     fn monte_carlo(case: impl Into<String>, backend: &'static str, expected: f64, m: &Measurement) -> Self {
         // A floor of f32 resolution for cases whose noise is zero.
         let tol = (Z_CRIT * m.stderr).max(1e-6 * expected.abs());
@@ -95,9 +76,9 @@ impl CaseResult {
 /// How big the suite runs.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Size {
-    /// For CI: fewer rays in the counting checks, smaller images.
+    /// For CI: 2^24 samples in the accumulation case.
     Quick,
-    /// The full counts (1e6 hit points, 1e7 rays).
+    /// 2^25 samples in the accumulation case.
     Full,
 }
 
@@ -255,10 +236,6 @@ pub fn run(targets: &[Device<'_>], size: Size) -> Result<Vec<CaseResult>, GpuErr
         accumulation(t, size, &mut out)?;
     }
     irradiance_estimator(&mut out);
-    ray_sphere_precision(&mut out);
-    self_intersection(size, &mut out);
-    watertight(size, &mut out);
-    sampling(&mut out);
     Ok(out)
 }
 
@@ -550,374 +527,6 @@ fn accumulation(t: &Device<'_>, size: Size, out: &mut Vec<CaseResult>) -> Result
         p.non_finite as u64,
     ));
     Ok(())
-}
-
-/// Ray/sphere hits against an f64 computation: the distance of the hit
-/// point `o + t d` (t from f32, the rest in f64) from the true sphere, in
-/// units of the f32 resolution of the coordinates involved, eps x max(|o|,
-/// |c| + r). An f32 `t` cannot do better than about one unit; tolerance 8.
-fn ray_sphere_precision(out: &mut Vec<CaseResult>) {
-    struct Cfg {
-        name: &'static str,
-        center: Vec3,
-        radius: f32,
-        origin: fn(&mut Rng, Vec3, f32) -> Vec3,
-        /// Perpendicular offset of the aim point as a fraction of the radius.
-        aim: f32,
-    }
-    let outside = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * (r * 5.0);
-    let far = |rng: &mut Rng, c: Vec3, _r: f32| c + random_dir(rng) * 1e4;
-    let on_surface = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * r;
-    let inside = |rng: &mut Rng, c: Vec3, r: f32| c + random_dir(rng) * (r * 0.5 * rng.next_f32());
-    let cases = [
-        Cfg { name: "far sphere (1e4 away)", center: Vec3::new(3.0, -2.0, 1.0), radius: 1.0, origin: far, aim: 0.9 },
-        Cfg {
-            name: "tiny sphere (radius 1e-3)",
-            center: Vec3::new(0.2, 0.1, -0.4),
-            radius: 1e-3,
-            origin: outside,
-            aim: 0.9,
-        },
-        Cfg {
-            name: "tangent rays (aim at 0.99999 r)",
-            center: Vec3::new(1.0, 1.0, 1.0),
-            radius: 2.0,
-            origin: outside,
-            aim: 0.99999,
-        },
-        Cfg {
-            name: "origin on the surface",
-            center: Vec3::new(-1.0, 0.5, 2.0),
-            radius: 0.7,
-            origin: on_surface,
-            aim: 0.3,
-        },
-        Cfg { name: "origin inside", center: Vec3::new(0.0, 3.0, 0.0), radius: 1.5, origin: inside, aim: 0.3 },
-    ];
-    for cfg in cases {
-        let mut rng = Rng::new(11, 22, 33, 44, 55);
-        let mut worst = 0.0f64;
-        let mut misses = 0;
-        for _ in 0..100_000 {
-            let o = (cfg.origin)(&mut rng, cfg.center, cfg.radius);
-            // Aim at a point at `aim` r from the centre, across the view.
-            let to_c = (cfg.center - o).normalize_or(Vec3::X);
-            let (tb, _) = pt_core::sampling::orthonormal_basis(to_c);
-            let target = cfg.center + tb * (cfg.aim * cfg.radius * rng.next_f32());
-            let Some(dir) = (target - o).try_normalize() else { continue };
-            let ray = Ray { origin: o, dir };
-            let t = intersect_sphere(cfg.center, cfg.radius, &ray, 1e-4 * cfg.radius, f32::MAX);
-            if t == f32::MAX {
-                misses += 1;
-                continue;
-            }
-            let p = ray.origin.as_dvec3() + ray.dir.as_dvec3() * t as f64;
-            let resolution = f32::EPSILON as f64 * (o.length().max(cfg.center.length() + cfg.radius)) as f64;
-            let err = ((p - cfg.center.as_dvec3()).length() - cfg.radius as f64).abs() / resolution;
-            worst = worst.max(err);
-        }
-        // Every ray aims inside the sphere: a miss is an error too.
-        let measured = if misses > 0 { f64::INFINITY } else { worst };
-        out.push(CaseResult::new(
-            format!("ray/sphere, {}: hit point off the sphere, in f32 ulps", cfg.name),
-            "core",
-            0.0,
-            measured,
-            0.0,
-            8.0,
-            0,
-        ));
-    }
-}
-
-/// The far root of a ray from inside a sphere, in f64 from the f32 inputs.
-fn far_root_f64(center: Vec3, radius: f32, o: Vec3, d: Vec3) -> f64 {
-    let (f, d) = (o.as_dvec3() - center.as_dvec3(), d.as_dvec3().normalize());
-    let b = f.dot(d);
-    let c = f.dot(f) - (radius as f64).powi(2);
-    -b + (b * b - c).max(0.0).sqrt()
-}
-
-fn random_dir(rng: &mut Rng) -> Vec3 {
-    let z = 1.0 - 2.0 * rng.next_f32();
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// From hit points on spheres (outside and inside) and walls at scales
-/// 1e-3 to 1e4, spawned reflection rays never re-hit their own surface
-/// (inside a sphere, the hit is the far side, not the start) and shadow rays
-/// to points in the visible hemisphere are never blocked by it.
-fn self_intersection(size: Size, out: &mut Vec<CaseResult>) {
-    let per_scale: u32 = if size == Size::Full { 200_000 } else { 20_000 };
-    let scales = [1e-3f32, 1e-1, 1.0, 1e2, 1e4];
-    let failures: u64 = scales
-        .par_iter()
-        .map(|&s| {
-            let mut fails = 0u64;
-            let mut rng = Rng::new(s.to_bits(), 7, 0, 0, 0);
-            let center = Vec3::new(0.3, -0.7, 0.2) * s;
-            let wall = Wall::new(
-                Vec3::new(-1.0, 0.2, 1.0) * s,
-                Vec3::new(2.0, 0.1, 0.0) * s,
-                Vec3::new(0.0, 0.3, -2.0) * s,
-                Vec3::ONE,
-            );
-            for _ in 0..per_scale {
-                // Sphere, from outside: the hit, its reflection and a shadow ray.
-                let o = center + random_dir(&mut rng) * (3.0 * s);
-                let dir = (center + random_dir(&mut rng) * (0.5 * s) - o).normalize();
-                let ray = Ray { origin: o, dir };
-                let t = intersect_sphere(center, s, &ray, 0.0, f32::MAX);
-                if t < f32::MAX {
-                    let (p, n) = sphere_hit_point(center, s, &ray, t);
-                    let origin = offset_origin(p, n, center.abs() + Vec3::splat(s));
-                    let refl = Ray { origin, dir: cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) };
-                    fails += (intersect_sphere(center, s, &refl, 0.0, f32::MAX) < f32::MAX) as u64;
-                    let target =
-                        p + cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) * (s * 2.0 * rng.next_f32().max(1e-3));
-                    let to = target - origin;
-                    let shadow = Ray { origin, dir: to.normalize() };
-                    fails += (intersect_sphere(center, s, &shadow, 0.0, to.length()) < to.length()) as u64;
-                }
-                // Sphere from inside (a spherical room): the reflection must
-                // find the far side (within 1e-4 r of the f64 root from the
-                // same origin), not its own start.
-                let o = center + random_dir(&mut rng) * (0.5 * s);
-                let ray = Ray { origin: o, dir: random_dir(&mut rng) };
-                let t = intersect_sphere(center, s, &ray, 0.0, f32::MAX);
-                let (p, n_out) = sphere_hit_point(center, s, &ray, t);
-                let n = -n_out;
-                let origin = offset_origin(p, n, center.abs() + Vec3::splat(s));
-                let d = cosine_hemisphere(n, rng.next_f32(), rng.next_f32());
-                let t2 = intersect_sphere(center, s, &Ray { origin, dir: d }, 0.0, f32::MAX);
-                fails += ((t2 as f64 - far_root_f64(center, s, origin, d)).abs() > 1e-4 * s as f64) as u64;
-                // Wall: the integrator skips the wall it leaves, but the offset
-                // alone must also keep the ray off it.
-                let o = Vec3::new(0.1, 2.0, -0.2) * s;
-                let aim = wall.corner + wall.edge_u * rng.next_f32() + wall.edge_v * rng.next_f32();
-                let ray = Ray { origin: o, dir: (aim - o).normalize() };
-                let t = intersect_wall(&wall, &ray, 0.0, f32::MAX);
-                if t < f32::MAX {
-                    let n = if wall.normal.dot(ray.dir) < 0.0 { wall.normal } else { -wall.normal };
-                    let origin = offset_origin(ray.at(t), n, ray.origin.abs() + (ray.dir * t).abs());
-                    let refl = Ray { origin, dir: cosine_hemisphere(n, rng.next_f32(), rng.next_f32()) };
-                    fails += (intersect_wall(&wall, &refl, 0.0, f32::MAX) < f32::MAX) as u64;
-                } else {
-                    fails += 1;
-                }
-            }
-            fails
-        })
-        .sum();
-    let points = per_scale as u64 * scales.len() as u64 * 3;
-    out.push(CaseResult::new(
-        format!("self-intersection: {points} hit points at scales 1e-3..1e4, failures"),
-        "core",
-        0.0,
-        failures as f64,
-        0.0,
-        0.0,
-        0,
-    ));
-}
-
-/// Rays from inside a closed box aimed exactly at its edges and corners:
-/// none escapes through a seam.
-fn watertight(size: Size, out: &mut Vec<CaseResult>) {
-    let rays: u32 = if size == Size::Full { 10_000_000 } else { 1_000_000 };
-    let scene = {
-        let mut s = Scene::default_scene();
-        // Close the room: add the front wall.
-        s.walls.push(wall(Vec3::new(1.0, 0.0, 1.0), Vec3::new(-2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), 0.5));
-        s
-    };
-    let mut params = scene.frame_params(&RenderSettings::default(), 1, 0);
-    params.sphere_count = 0;
-    let geometry = scene.geometry().expect("six walls fit the geometry block");
-    let chunks = 64u32;
-    let escapes: u64 = (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            let mut rng = Rng::new(c, 99, 0, 0, 0);
-            let mut escaped = 0u64;
-            for i in 0..rays / chunks {
-                let o = Vec3::new(2.0 * rng.next_f32() - 1.0, 2.0 * rng.next_f32(), 2.0 * rng.next_f32() - 1.0) * 0.999;
-                // A point on one of the 12 edges, or a corner.
-                let corner = |k: u32| {
-                    Vec3::new(
-                        if k & 1 == 0 { -1.0 } else { 1.0 },
-                        if k & 2 == 0 { 0.0 } else { 2.0 },
-                        if k & 4 == 0 { -1.0 } else { 1.0 },
-                    )
-                };
-                let target = if i % 8 == 0 {
-                    corner(rng.next_u32() % 8)
-                } else {
-                    let a = corner(rng.next_u32() % 8);
-                    let axis = rng.next_u32() % 3;
-                    let mut b = a;
-                    match axis {
-                        0 => b.x = -a.x,
-                        1 => b.y = 2.0 - a.y,
-                        _ => b.z = -a.z,
-                    }
-                    a.lerp(b, rng.next_f32())
-                };
-                let Some(dir) = (target - o).try_normalize() else { continue };
-                let hit = query::closest_hit(&Ray { origin: o, dir }, &params, &geometry, query::NO_WALL, query::T_FAR);
-                escaped += (hit.kind == query::HitKind::Nothing) as u64;
-            }
-            escaped
-        })
-        .sum();
-    out.push(CaseResult::new(
-        format!("watertight: {rays} rays at the edges and corners of a closed box, escapes"),
-        "core",
-        0.0,
-        escapes as f64,
-        0.0,
-        0.0,
-        0,
-    ));
-}
-
-/// Counts of `n` directions from `sample` in the frame of `axis`: `bands`
-/// bands of equal width in `1 - cos` of the angle to the axis over [0,
-/// `max_x`], each cut in `sectors` equal sectors of the turn about it, then
-/// one cell for directions outside. Directions are normalised in f64 (the
-/// test is about where they point; an f32 unit vector is unit only to
-/// ~1e-7), and a hair of slack at both ends of the range absorbs rounding.
-fn cap_histogram(
-    n: usize,
-    axis: Vec3,
-    max_x: f64,
-    (bands, sectors): (usize, usize),
-    sample: impl Fn(&mut Rng) -> Vec3,
-) -> Vec<f64> {
-    let (tb, bb) = pt_core::sampling::orthonormal_basis(axis);
-    let (axis, tb, bb) = (axis.as_dvec3(), tb.as_dvec3(), bb.as_dvec3());
-    let mut rng = Rng::new(5, 6, 7, 8, 9);
-    let mut observed = vec![0.0; bands * sectors + 1];
-    for _ in 0..n {
-        let d = sample(&mut rng).as_dvec3().normalize();
-        let band = (1.0 - d.dot(axis)) / max_x;
-        let phi = d.dot(bb).atan2(d.dot(tb)).rem_euclid(2.0 * PI);
-        let cell = if !(-1e-3..=1.0 + 1e-3).contains(&band) {
-            bands * sectors
-        } else {
-            ((band * bands as f64) as usize).min(bands - 1) * sectors
-                + ((phi / (2.0 * PI) * sectors as f64) as usize).min(sectors - 1)
-        };
-        observed[cell] += 1.0;
-    }
-    observed
-}
-
-fn sampling(out: &mut Vec<CaseResult>) {
-    let bins = SphereBins { nt: 20, np: 40 };
-    let n = 400_000usize;
-    let tests = 7.0;
-    // Sidak: each test at 1 - (1 - alpha)^(1/tests).
-    let alpha_each = 1.0 - (1.0 - SAMPLING_ALPHA).powf(1.0 / tests);
-    let mut chi2_case = |name: String, sample: &dyn Fn(&mut Rng) -> Vec3, pdf: &dyn Fn([f64; 3]) -> f64| {
-        let mut rng = Rng::new(5, 6, 7, 8, 9);
-        let mut observed = vec![0.0; bins.nt * bins.np];
-        for _ in 0..n {
-            let d = sample(&mut rng);
-            observed[bins.cell([d.x as f64, d.y as f64, d.z as f64])] += 1.0;
-        }
-        let expected = bins.expected(n, 8, pdf);
-        let r = chi2_test(&observed, &expected);
-        out.push(CaseResult::chi2(&name, "", &r, alpha_each, true));
-    };
-    let normal = Vec3::new(0.3, -0.4, 0.866).normalize();
-    let nd = normal.as_dvec3();
-    chi2_case("cosine hemisphere".into(), &|rng| cosine_hemisphere(normal, rng.next_f32(), rng.next_f32()), &|d| {
-        DVec3::from_array(d).dot(nd).max(0.0) / PI
-    });
-    // The glow lobe, binned in its own frame (`cap_histogram`) over x = 1 -
-    // cos in [0, reach]. Each band expects n times the integral of the
-    // lobe's pdf over it (2 pi dx, by a fine midpoint sum through `pdf`
-    // itself), shared by its sectors. Lights of sin(a) = 0.5 and 0.2, whose
-    // lobes peak 3 and 8 times above their rims.
-    for sin_sigma in [0.5f32, 0.2] {
-        let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
-        let lobe = light::GlowLobe::new(&light::light_cone(&l, Vec3::ZERO));
-        let (nt, np, sub) = (20usize, 20usize, 1000usize);
-        let (reach, axis) = (lobe.reach() as f64, lobe.axis().as_dvec3());
-        let side = pt_core::sampling::orthonormal_basis(lobe.axis()).0.as_dvec3();
-        let band_mass = |band: usize| {
-            (0..sub)
-                .map(|i| {
-                    let x = reach * (band as f64 + (i as f64 + 0.5) / sub as f64) / nt as f64;
-                    let dir = side * (x * (2.0 - x)).sqrt() + axis * (1.0 - x);
-                    2.0 * PI * lobe.pdf(dir.as_vec3()) as f64 * reach / (nt * sub) as f64
-                })
-                .sum::<f64>()
-        };
-        let expected: Vec<f64> =
-            (0..nt).flat_map(|t| std::iter::repeat_n(n as f64 * band_mass(t) / np as f64, np)).collect();
-        let observed =
-            cap_histogram(n, lobe.axis(), reach, (nt, np), |rng| lobe.sample(rng.next_f32(), rng.next_f32()));
-        let outside = observed[nt * np];
-        let r = chi2_test(&observed[..nt * np], &expected);
-        let name = format!("glow lobe, sin(a)={sin_sigma}");
-        out.push(CaseResult::chi2(&name, &format!(", {outside} outside"), &r, alpha_each, outside == 0.0));
-    }
-    // The light cone, binned in its own frame over [0, 1 - cos_max]: bands
-    // of equal width in cos(theta) and sectors of phi are equal solid angles
-    // of the cap, so each expects n / cells exactly; a sample outside the
-    // cap lands in the extra cell, which expects none.
-    for sin_sigma in [0.05f32, 0.5, 0.95] {
-        let l = SphereLight::new(Vec3::new(0.2, 0.1, 0.9).normalize() * 2.0, 2.0 * sin_sigma, Vec3::ONE);
-        let cone = light::light_cone(&l, Vec3::ZERO);
-        let (nt, np) = (20usize, 40usize);
-        let observed = cap_histogram(n, cone.axis, cone.one_minus_cos_max as f64, (nt, np), |rng| {
-            cone.sample(rng.next_f32(), rng.next_f32()).0
-        });
-        let outside = observed[nt * np];
-        let r = chi2_test(&observed[..nt * np], &vec![n as f64 / (nt * np) as f64; nt * np]);
-        let name = format!("sphere light cone, sin(a)={sin_sigma}");
-        out.push(CaseResult::chi2(&name, &format!(", {outside} outside"), &r, alpha_each, outside == 0.0));
-    }
-    // The RNG: 1e6 floats in 1000 bins.
-    let mut rng = Rng::new(1, 2, 3, 4, 5);
-    let mut obs = vec![0.0; 1000];
-    for _ in 0..1_000_000 {
-        obs[(rng.next_f32() * 1000.0) as usize] += 1.0;
-    }
-    let r = chi2_test(&obs, &vec![1000.0; 1000]);
-    out.push(CaseResult::chi2("RNG uniformity", "", &r, alpha_each, true));
-
-    // Densities integrate to one (midpoint rule in f64, 2000 x 2000 cells).
-    let bins = SphereBins { nt: 200, np: 200 };
-    let cos_total: f64 = bins.expected(1, 10, |d| DVec3::from_array(d).dot(nd).max(0.0) / PI).iter().sum();
-    out.push(CaseResult::new("cosine hemisphere pdf integrates to 1", "core", 1.0, cos_total, 0.0, 1e-4, 0));
-    for sin_sigma in [0.01f64, 0.5, 0.999] {
-        let l = SphereLight::new(Vec3::new(0.0, 0.0, 2.0), (2.0 * sin_sigma) as f32, Vec3::ONE);
-        let cone = light::light_cone(&l, Vec3::ZERO);
-        // Solid angle of the cap 2 pi (1 - cos) in f64, times the f32 pdf.
-        let cap = 2.0 * PI * (sin_sigma * sin_sigma) / (1.0 + (1.0 - sin_sigma * sin_sigma).sqrt());
-        out.push(CaseResult::new(
-            format!("cone pdf x cap solid angle = 1, sin(a)={sin_sigma}"),
-            "core",
-            1.0,
-            cone.pdf() as f64 * cap,
-            0.0,
-            1e-5,
-            0,
-        ));
-    }
-    // No correlation between neighbouring pixels or consecutive frames.
-    for (name, dx, dframe) in [("neighbouring pixels", 1u32, 0u32), ("consecutive frames", 0, 1)] {
-        let n = 200_000u32;
-        let corr = pt_core::rng::stream_correlation(n, dx, dframe);
-        // Under independence corr ~ N(0, 1/n).
-        let se = 1.0 / (n as f64).sqrt();
-        out.push(CaseResult::new(format!("RNG correlation of {name}"), "core", 0.0, corr, se, Z_CRIT * se, 0));
-    }
 }
 
 /// The report as a markdown table.

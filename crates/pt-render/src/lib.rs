@@ -13,4 +13,3 @@ pub use cpu::CpuRenderer;
 pub use gpu::{GpuContext, GpuError, GpuRenderer, KERNEL_SPV};
 pub use renderer::{Device, Renderer};
 pub use scene::{RenderSettings, Scene, SceneError};
-pub mod stats;

@@ -1,5 +1,5 @@
-//! Statistics for the accuracy suite: the chi-square distribution and a
-//! Mitsuba-style binned goodness-of-fit test for direction samplers.
+//! The chi-square distribution and a Mitsuba-style binned goodness-of-fit
+//! test for direction samplers, for the sampling routines' tests.
 
 use std::f64::consts::PI;
 
