@@ -302,15 +302,7 @@ mod tests {
     #[test]
     fn rays_at_the_edges_and_corners_of_a_closed_box_never_escape() {
         let v = Vec3::new;
-        let a = Vec3::splat(0.73);
-        let walls = [
-            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
-            Wall::new(v(-1.0, 2.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
-            Wall::new(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(1.0, 0.0, 1.0), v(-2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
-        ];
+        let walls = crate::test_support::closed_room();
         let geometry = Geometry::new(&walls, &[]).expect("six walls fit");
         let params = FrameParams {
             light: SphereLight::new(v(0.0, 1.7, 0.0), 0.15, Vec3::splat(20.0)),

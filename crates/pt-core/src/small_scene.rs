@@ -149,13 +149,14 @@ mod tests {
     fn scene(walls: usize, spheres: usize, light: Vec3) -> (FrameParams, Geometry) {
         let v = Vec3::new;
         let a = Vec3::splat(0.73);
+        let [floor, ceiling, back, left, right, front] = crate::test_support::closed_room();
         let all_walls = [
-            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
-            Wall::new(v(-1.0, 2.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
-            Wall::new(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
-            Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
+            floor,
+            ceiling,
+            back,
+            left,
+            right,
+            front,
             Wall::new(v(-0.5, 0.2, 0.0), v(0.6, 0.3, 0.0), v(0.0, 0.5, 0.4), a),
             Wall::new(v(0.2, 1.0, -0.5), v(0.5, 0.0, 0.2), v(0.1, 0.4, 0.0), a),
         ];

@@ -54,5 +54,21 @@ pub fn random_dir(rng: &mut Rng) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// The default room closed by a front wall: floor, ceiling, back, left,
+/// right and front, all of albedo 0.73.
+pub fn closed_room() -> [crate::wall::Wall; 6] {
+    use crate::wall::Wall;
+    let v = Vec3::new;
+    let a = Vec3::splat(0.73);
+    [
+        Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
+        Wall::new(v(-1.0, 2.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), a),
+        Wall::new(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
+        Wall::new(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
+        Wall::new(v(1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), a),
+        Wall::new(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), a),
+    ]
+}
+
 /// The scales at which spawned rays must not re-hit their own surface.
 pub const SCALES: [f32; 5] = [1e-3, 1e-1, 1.0, 1e2, 1e4];
