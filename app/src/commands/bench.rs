@@ -27,15 +27,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         }
         let table = bench::throughput_markdown(&rows);
         println!("{table}");
-        report.push_str(&format!(
-            "## Throughput\n\nDefault scene; warm-up frames for half a second (at least one), then {} timed frames per \
-             configuration; median and \
-             range of frames per second. Rays per sample (closest-hit plus shadow rays) are counted by the CPU's \
-             instrumented trace of the same code over every 4th pixel in x and y, and multiply the samples per \
-             second of both backends. The original OpenGL design reached 120 frames/s at 1920x1080, 4 spp/frame, \
-             5 bounces on an RTX 3050: about 1.0e9 camera samples/s.\n\n{table}\n",
-            args.reps
-        ));
+        report.push_str(&bench::throughput_section(args.reps, &table));
     }
 
     if args.what != BenchWhat::Throughput {
@@ -84,25 +76,18 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
                 args.max_spp
             ),
         };
-        report.push_str(&format!(
-            "## Error against time\n\nScene: {}; {}x{} pixels, {} bounces; {} seeds per strategy; errors against {}. \
-             Each strategy renders progressively to {} spp; errors are measured at 4, 8, 16, ... spp (no frame \
-             spans a measurement), with time counted around synchronised frames only (readback and evaluation excluded). An untimed warm-up \
-             render comes first, then every strategy once per seed in turn; each point takes the median time \
-             and the mean relMSE of the seeds (the machine is shared: a single run can be slowed by half). \
-             Equal time is the \
-             shortest total time of any strategy; times to relMSE 1e-3 are interpolated log-log between \
-             measurements.\n\n![relMSE against time]({})\n\nAll points: `{}`.\n{table}\n",
-            args.scene.as_ref().map_or("the built-in default scene".to_string(), |p| p.display().to_string()),
-            args.width,
-            args.height,
-            settings.max_bounces,
-            args.seeds,
-            reference_note,
-            args.max_spp,
-            relative_to_report(&png, args.report.as_deref()),
-            relative_to_report(&csv, args.report.as_deref()),
-        ));
+        report.push_str(&bench::error_against_time_section(&bench::ErrorAgainstTime {
+            scene: args.scene.as_ref().map_or("the built-in default scene".to_string(), |p| p.display().to_string()),
+            width: args.width,
+            height: args.height,
+            max_bounces: settings.max_bounces,
+            seeds: args.seeds,
+            reference: reference_note,
+            max_spp: args.max_spp,
+            plot: relative_to_report(&png, args.report.as_deref()),
+            csv: relative_to_report(&csv, args.report.as_deref()),
+            table,
+        }));
         if let Some(m) = &args.mitsuba_csv {
             report.push_str(&mitsuba_section(m, &points)?);
         }
