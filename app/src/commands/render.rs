@@ -5,8 +5,8 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
 use pt_render::output::{self, OutputFormat};
-use pt_render::renderer::render_progressive;
-use pt_render::{Device, GpuContext, RenderSettings, Renderer};
+use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
+use pt_render::{Device, GpuContext, RenderSettings};
 
 use super::{load_scene, spp_progress_bar};
 use crate::{BackendArg, RenderArgs, SamplerArg, TonemapArg};
@@ -46,38 +46,51 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         }
     };
     let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
-    let mut renderer = match (args.backend, Renderer::new(device, params, &walls, &spheres)) {
-        (_, Ok(r)) => r,
-        (BackendArg::Auto, Err(e)) if ctx.is_some() => {
-            eprintln!("GPU unavailable ({e}); rendering on the CPU");
-            Renderer::new(Device::Cpu, params, &walls, &spheres)?
-        }
-        (BackendArg::Gpu, Err(e)) => return Err(e).context("cannot start the GPU renderer"),
-        (_, Err(e)) => return Err(e.into()),
+    let display = (format == OutputFormat::Png).then_some((args.exposure, tonemap));
+    let render = |device: Device<'_>| -> Result<TiledRender> {
+        let tiles = device_tiles(device, settings.width, settings.height);
+        eprintln!("{}", device.description());
+        eprintln!(
+            "rendering {}x{}, {} spp, max {} bounces, seed {}{}",
+            settings.width,
+            settings.height,
+            settings.spp,
+            settings.max_bounces,
+            args.seed,
+            if tiles.len() > 1 { format!(", in {} tiles of rows", tiles.len()) } else { String::new() }
+        );
+        let spp = settings.spp as u64;
+        let bar = spp_progress_bar(settings.spp.saturating_mul(tiles.len() as u32));
+        bar.enable_steady_tick(Duration::from_millis(200));
+        let result = render_tiled(
+            device,
+            params,
+            &walls,
+            &spheres,
+            settings.spp,
+            args.spp_per_frame,
+            &tiles,
+            display,
+            |tile, done| bar.set_position(tile as u64 * spp + done as u64),
+        );
+        bar.finish_and_clear();
+        Ok(result?)
     };
-    eprintln!("{}", renderer.description());
-    eprintln!(
-        "rendering {}x{}, {} spp, max {} bounces, seed {}",
-        settings.width, settings.height, settings.spp, settings.max_bounces, args.seed
-    );
-
-    let bar = spp_progress_bar(settings.spp);
-    bar.enable_steady_tick(Duration::from_millis(200));
-    let (accum, stats) =
-        render_progressive(&mut renderer, settings.spp, args.spp_per_frame, |done| bar.set_position(done as u64))
-            .context("rendering failed")?;
-    bar.finish_and_clear();
-
-    match format {
-        OutputFormat::Png => {
-            let rgba = renderer.display(args.exposure, tonemap).context("display pass failed")?;
-            output::write_png(&args.out, settings.width, settings.height, &rgba)?;
+    let (device, image) = match (args.backend, render(device)) {
+        (_, Ok(image)) => (device, image),
+        (BackendArg::Auto, Err(e)) if ctx.is_some() => {
+            eprintln!("GPU render failed ({e:#}); rendering on the CPU");
+            (Device::Cpu, render(Device::Cpu)?)
         }
-        OutputFormat::Exr => {
-            output::write_exr(&args.out, settings.width, settings.height, &output::mean_radiance(&accum))?
-        }
+        (_, Err(e)) => return Err(e).context("rendering failed"),
+    };
+    let stats = image.stats;
+
+    match (format, image.display) {
+        (OutputFormat::Png, Some(rgba)) => output::write_png(&args.out, settings.width, settings.height, &rgba)?,
+        _ => output::write_exr(&args.out, settings.width, settings.height, &output::mean_radiance(&image.accum))?,
     }
-    println!("adapter: {}", renderer.description());
+    println!("adapter: {}", device.description());
     println!("time: {:.3} s", stats.elapsed.as_secs_f64());
     println!("samples per second: {:.3e}", stats.samples_per_second());
     println!("non-finite samples: {}", stats.non_finite);

@@ -33,7 +33,7 @@ pub use accum::{AccumPixel, PixelSamples};
 pub use camera::Camera;
 pub use geometry::Geometry;
 pub use light::SphereLight;
-pub use params::FrameParams;
+pub use params::{FrameParams, Tile};
 pub use ray::Ray;
 pub use sphere::Sphere;
 pub use wall::Wall;

@@ -43,6 +43,36 @@ pub const TONEMAP_CLAMP: u32 = 0;
 /// `tonemap`: the ACES filmic fit of Narkowicz (2015).
 pub const TONEMAP_ACES: u32 = 1;
 
+/// The rectangle of the image that a renderer accumulates: its buffers hold
+/// this rectangle only, row by row, while pixel coordinates (and with them
+/// camera rays and sample streams) stay those of the whole image. An image
+/// too large for the adapter's buffers renders as several tiles that make
+/// the same pixels as one.
+#[repr(C)]
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct Tile {
+    /// Column of the tile's first pixel in the image.
+    pub x: u32,
+    /// Row of the tile's first pixel in the image (row 0 at the top).
+    pub y: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl Tile {
+    /// The whole `width` x `height` image as one tile.
+    pub fn whole(width: u32, height: u32) -> Self {
+        Self { x: 0, y: 0, width, height }
+    }
+
+    /// Pixels in the tile.
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+}
+
 /// The kernel's uniform block. Every `Vec3` sits at a multiple of 16 bytes
 /// and the struct is a multiple of 16 bytes, which satisfies std140.
 #[repr(C)]
@@ -82,4 +112,6 @@ pub struct FrameParams {
     /// Samples per pixel accumulated before this frame: the Sobol index of
     /// this frame's first sample.
     pub sample_offset: u32,
+    /// The part of the image this renderer accumulates.
+    pub tile: Tile,
 }

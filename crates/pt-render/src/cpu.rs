@@ -18,9 +18,10 @@ pub struct CpuRenderer {
 }
 
 impl CpuRenderer {
-    /// A renderer for `params` and geometry, with an empty accumulation.
+    /// A renderer for `params` and geometry, with an empty accumulation of
+    /// `params.tile`.
     pub fn new(params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, TooManyObjects> {
-        let pixels = params.width as usize * params.height as usize;
+        let pixels = params.tile.pixels() as usize;
         Ok(Self {
             params,
             geometry: Box::new(geometry(walls, spheres)?),
@@ -44,10 +45,10 @@ impl CpuRenderer {
         self.samples_done = self.samples_done.saturating_add(samples);
         let params = self.params;
         let geometry = &*self.geometry;
-        let width = params.width as usize;
-        self.accum.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        let tile = params.tile;
+        self.accum.par_chunks_mut(tile.width.max(1) as usize).enumerate().for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
-                px.add(integrator::render_pixel(x as u32, y as u32, &params, geometry), true);
+                px.add(integrator::render_pixel(tile.x + x as u32, tile.y + y as u32, &params, geometry), true);
             }
         });
         self.next_frame += 1;

@@ -3,9 +3,10 @@
 
 use std::time::{Duration, Instant};
 
-use pt_core::{AccumPixel, FrameParams, Sphere, Wall};
+use pt_core::{AccumPixel, FrameParams, Sphere, Tile, Wall};
 
 use crate::cpu::CpuRenderer;
+use crate::gpu::renderer::max_image_bytes;
 use crate::gpu::{GpuContext, GpuError, GpuRenderer};
 
 /// Where paths are traced: the rust-gpu kernel on a GPU context (shared by
@@ -162,7 +163,7 @@ pub fn render_progressive(
     let p = renderer.params();
     let stats = RenderStats {
         elapsed,
-        samples: p.width as u64 * p.height as u64 * spp as u64,
+        samples: p.tile.pixels() * spp as u64,
         non_finite: accum.iter().map(|a| a.non_finite as u64).sum(),
     };
     Ok((accum, stats))
@@ -186,4 +187,72 @@ pub fn render_accum(
     }
     renderer.wait()?;
     renderer.accum()
+}
+
+/// The tiles of a `width` x `height` image: bands of whole rows, each of at
+/// most `max_pixels` pixels (at least one row), top to bottom. Bands keep
+/// each tile's rows contiguous in the image, so tiles join by appending.
+pub fn row_bands(width: u32, height: u32, max_pixels: u64) -> Vec<Tile> {
+    let rows = (max_pixels / width.max(1) as u64).clamp(1, height.max(1) as u64) as u32;
+    (0..height).step_by(rows as usize).map(|y| Tile { x: 0, y, width, height: rows.min(height - y) }).collect()
+}
+
+/// The tiles `device` renders a `width` x `height` image in: the whole
+/// image where its accumulation fits one buffer of the adapter, else bands
+/// of rows that each fit. GPU memory then stays within one tile's buffers
+/// (at most [`max_image_bytes`], 128 MiB on lavapipe, plus an eighth for
+/// the display), whatever the image size. The CPU renders the whole image.
+pub fn device_tiles(device: Device<'_>, width: u32, height: u32) -> Vec<Tile> {
+    match device {
+        Device::Gpu(ctx) => row_bands(width, height, max_image_bytes(&ctx.device) / size_of::<AccumPixel>() as u64),
+        Device::Cpu => vec![Tile::whole(width, height)],
+    }
+}
+
+/// A whole image rendered tile by tile.
+pub struct TiledRender {
+    /// The accumulation of the whole image, row 0 at the top.
+    pub accum: Vec<AccumPixel>,
+    /// The display pass's RGBA8 output, when asked for.
+    pub display: Option<Vec<u32>>,
+    /// Figures summed over the tiles.
+    pub stats: RenderStats,
+}
+
+/// Renders the image of `params` (whose tile is ignored) in `tiles`, bands
+/// of whole rows from [`row_bands`] or [`device_tiles`], one renderer at a
+/// time: `spp` samples per pixel in frames of at most `per_frame`, and the
+/// display pass with `display` = (exposure, tone mapper) when given.
+/// `progress(tile, samples done in it)` follows [`render_progressive`].
+/// Pixels keep their image coordinates, so the result is the one a single
+/// tile would give.
+#[allow(clippy::too_many_arguments)]
+pub fn render_tiled(
+    device: Device<'_>,
+    params: FrameParams,
+    walls: &[Wall],
+    spheres: &[Sphere],
+    spp: u32,
+    per_frame: u32,
+    tiles: &[Tile],
+    display: Option<(f32, u32)>,
+    mut progress: impl FnMut(usize, u32),
+) -> Result<TiledRender, GpuError> {
+    let mut out = TiledRender {
+        accum: Vec::with_capacity(params.width as usize * params.height as usize),
+        display: display.map(|_| Vec::new()),
+        stats: RenderStats { elapsed: Duration::ZERO, samples: 0, non_finite: 0 },
+    };
+    for (i, &tile) in tiles.iter().enumerate() {
+        let mut renderer = Renderer::new(device, FrameParams { tile, ..params }, walls, spheres)?;
+        let (accum, stats) = render_progressive(&mut renderer, spp, per_frame, |done| progress(i, done))?;
+        out.accum.extend_from_slice(&accum);
+        if let (Some((exposure, tonemap)), Some(rgba)) = (display, out.display.as_mut()) {
+            rgba.extend(renderer.display(exposure, tonemap)?);
+        }
+        out.stats.elapsed += stats.elapsed;
+        out.stats.samples += stats.samples;
+        out.stats.non_finite += stats.non_finite;
+    }
+    Ok(out)
 }

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
-use pt_core::{Camera, FrameParams, Geometry, Sphere, SphereLight, Wall};
+use pt_core::{Camera, FrameParams, Geometry, Sphere, SphereLight, Tile, Wall};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -285,6 +285,7 @@ impl Scene {
             tonemap: TONEMAP_ACES,
             flags: FLAGS_DEFAULT,
             sample_offset: 0,
+            tile: Tile::whole(settings.width, settings.height),
         }
     }
 

@@ -8,7 +8,7 @@ use std::mem::{offset_of, size_of};
 use naga::ArraySize;
 use naga::{Handle, Module, Type, TypeInner, front::spv};
 use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
-use pt_core::{AccumPixel, Camera, FrameParams, Geometry, Sphere, SphereLight, Wall};
+use pt_core::{AccumPixel, Camera, FrameParams, Geometry, Sphere, SphereLight, Tile, Wall};
 use pt_render::KERNEL_SPV;
 use pt_render::gpu::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS};
 
@@ -102,9 +102,11 @@ fn frame_params_match_the_uniform_block() {
             sphere_count,
             tonemap,
             flags,
-            sample_offset
+            sample_offset,
+            tile
         })
     );
+    assert_eq!(layout(&m, member(&m, params, 16)), host_layout!(Tile { x, y, width, height }));
     assert_eq!(
         layout(&m, member(&m, params, 0)),
         host_layout!(Camera { position, _pad0, forward, _pad1, right, _pad2, up, _pad3 })
@@ -140,7 +142,7 @@ fn accumulation_pixels_match_the_storage_array() {
 fn host_layouts_are_the_documented_ones() {
     // Exact numbers, so that a change of layout is a visible decision.
     assert_eq!(wall_layout(), (112, vec![0, 12, 16, 28, 32, 44, 48, 60, 64, 76, 80, 92, 96, 108]));
-    assert_eq!(size_of::<FrameParams>(), 160);
+    assert_eq!(size_of::<FrameParams>(), 176);
     assert_eq!(size_of::<Camera>(), 64);
     assert_eq!(size_of::<SphereLight>(), 32);
     assert_eq!(size_of::<Sphere>(), 32);

@@ -14,8 +14,10 @@ use pt_core::{AccumPixel, FrameParams, Geometry, PixelSamples, integrator, tonem
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
 
-/// Adds one frame of `samples_per_frame` samples to pixel `id`'s sum, and
-/// counts the non-finite samples it discarded. The `accumulate*` entry
+/// Adds one frame of `samples_per_frame` samples to the sum of pixel `id`
+/// of the tile (`params.tile`: the buffers hold the tile only; the pixel's
+/// coordinates in the image pick its camera ray and samples), and counts
+/// the non-finite samples it discarded. The `accumulate*` entry
 /// points differ only in their workgroup shape (`pathtracer bench`
 /// compares them); `accumulate` (8 x 8) is the default. The
 /// `accumulate_small_*` entry points trace a copy of a small scene
@@ -28,12 +30,13 @@ fn accumulate_pixel(
     non_finite: &mut [u32],
     render: impl Fn(u32, u32, &FrameParams, &Geometry) -> PixelSamples,
 ) {
-    if id.x >= params.width || id.y >= params.height {
+    let tile = params.tile;
+    if id.x >= tile.width || id.y >= tile.height {
         return;
     }
-    let samples = render(id.x, id.y, params, geometry);
+    let samples = render(tile.x + id.x, tile.y + id.y, params, geometry);
     // width != 0 always; the driver cannot know it (see `kahan_add`).
-    accum[(id.y * params.width + id.x) as usize].add(samples, params.width != 0);
+    accum[(id.y * tile.width + id.x) as usize].add(samples, params.width != 0);
     // Rare: the atomic costs nothing on clean frames.
     if samples.non_finite > 0 {
         // SAFETY: a relaxed add on a u32 in a storage buffer, at queue-family
@@ -90,7 +93,8 @@ accumulate_entry!(accumulate_4x4_groups, 4, 4);
 accumulate_entry!(accumulate_small_5w_2s, 8, 8, small::<5, 2>);
 accumulate_entry!(accumulate_small_8w_4s, 8, 8, small::<8, 4>);
 
-/// Turns every pixel's mean into a display colour: exposure, tone map, sRGB.
+/// Turns every pixel's mean into a display colour: exposure, tone map, sRGB
+/// (pixel `id` of the tile).
 #[spirv(compute(threads(8, 8)))]
 pub fn display(
     #[spirv(global_invocation_id)] id: UVec3,
@@ -98,10 +102,10 @@ pub fn display(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &[AccumPixel],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] out: &mut [u32],
 ) {
-    if id.x >= params.width || id.y >= params.height {
+    if id.x >= params.tile.width || id.y >= params.tile.height {
         return;
     }
-    let i = (id.y * params.width + id.x) as usize;
+    let i = (id.y * params.tile.width + id.x) as usize;
     let color = tonemap::display_color(accum[i].mean(), params.exposure, params.tonemap);
     out[i] = tonemap::pack_rgba8(color);
 }
@@ -114,8 +118,8 @@ pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &
     *uv = Vec2::new(position.x + 1.0, 1.0 - position.y) * 0.5;
 }
 
-/// Shows the display buffer in a viewport of exactly its size, one pixel
-/// per framebuffer pixel.
+/// Shows the display buffer (a tile, the whole image in the viewer) in a
+/// viewport of exactly its size, one pixel per framebuffer pixel.
 #[spirv(fragment)]
 pub fn blit_fs(
     uv: Vec2,
@@ -124,9 +128,10 @@ pub fn blit_fs(
     color: &mut Vec4,
 ) {
     // uv * size lands on pixel centres (x + 0.5): the floor is the pixel.
-    let (x, y) = ((uv.x * params.width as f32) as u32, (uv.y * params.height as f32) as u32);
-    *color = if x < params.width && y < params.height {
-        tonemap::unpack_rgba8(display[(y * params.width + x) as usize])
+    let tile = params.tile;
+    let (x, y) = ((uv.x * tile.width as f32) as u32, (uv.y * tile.height as f32) as u32);
+    *color = if x < tile.width && y < tile.height {
+        tonemap::unpack_rgba8(display[(y * tile.width + x) as usize])
     } else {
         Vec4::new(0.0, 0.0, 0.0, 1.0)
     };

@@ -1,7 +1,7 @@
 //! The progressive GPU renderer for one scene and image size.
 
 use pt_core::small_scene::smallest_fit;
-use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, WORKGROUP_SIZE, Wall};
+use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
@@ -50,6 +50,15 @@ fn geometry_buffer(device: &wgpu::Device, geometry: &Geometry) -> wgpu::Buffer {
     })
 }
 
+/// The most bytes one accumulation buffer may have on `device`: the
+/// smaller of its largest storage binding and its largest buffer (128 MiB
+/// on lavapipe and WebGPU's defaults). A tile's display buffer is an eighth
+/// of that.
+pub fn max_image_bytes(device: &wgpu::Device) -> u64 {
+    let limits = device.limits();
+    limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+}
+
 impl GpuRenderer {
     /// A renderer for `params` (size, camera, light, settings) and geometry.
     pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
@@ -64,7 +73,7 @@ impl GpuRenderer {
         });
         let geometry = Box::new(crate::scene::geometry(walls, spheres)?);
         let geometry_buf = geometry_buffer(&device, &geometry);
-        let (accum_buf, display_buf) = Self::image_buffers(&device, params.width, params.height)?;
+        let (accum_buf, display_buf) = Self::image_buffers(&device, params.tile)?;
         let non_finite_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("non-finite count"),
             size: 4,
@@ -111,13 +120,13 @@ impl GpuRenderer {
         Ok(renderer)
     }
 
-    fn image_buffers(device: &wgpu::Device, width: u32, height: u32) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
-        let pixels = width as u64 * height as u64;
+    /// The accumulation and display buffers of `tile`.
+    fn image_buffers(device: &wgpu::Device, tile: Tile) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+        let pixels = tile.pixels();
         let bytes = pixels * size_of::<AccumPixel>() as u64;
-        let limits = device.limits();
-        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let limit = max_image_bytes(device);
         if bytes > limit {
-            return Err(GpuError::TooLarge { width, height, bytes, limit });
+            return Err(GpuError::TooLarge { width: tile.width, height: tile.height, bytes, limit });
         }
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
@@ -143,8 +152,8 @@ impl GpuRenderer {
     /// Replaces the parameters. A change of image size reallocates the
     /// image buffers; the caller decides whether accumulation restarts.
     pub fn set_params(&mut self, params: FrameParams) -> Result<(), GpuError> {
-        if (params.width, params.height) != (self.params.width, self.params.height) {
-            let (accum, display) = Self::image_buffers(&self.device, params.width, params.height)?;
+        if params.tile != self.params.tile {
+            let (accum, display) = Self::image_buffers(&self.device, params.tile)?;
             self.accum_buf = accum;
             self.display_buf = display;
             self.rebind();
@@ -201,7 +210,7 @@ impl GpuRenderer {
     }
 
     fn workgroups(&self) -> (u32, u32) {
-        (self.params.width.div_ceil(WORKGROUP_SIZE), self.params.height.div_ceil(WORKGROUP_SIZE))
+        (self.params.tile.width.div_ceil(WORKGROUP_SIZE), self.params.tile.height.div_ceil(WORKGROUP_SIZE))
     }
 
     /// Traces with the general kernel's entry point of
@@ -290,7 +299,8 @@ impl GpuRenderer {
         encoder: &mut wgpu::CommandEncoder,
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        let (x, y) = (self.params.width.div_ceil(self.trace_shape.0), self.params.height.div_ceil(self.trace_shape.1));
+        let tile = self.params.tile;
+        let (x, y) = (tile.width.div_ceil(self.trace_shape.0), tile.height.div_ceil(self.trace_shape.1));
         let mut pass =
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("accumulate"), timestamp_writes });
         let pipeline = self.small_pipeline().unwrap_or(&self.accumulate);
