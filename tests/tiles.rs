@@ -14,9 +14,18 @@ fn render(device: Device<'_>, tiles: &[Tile]) -> (Vec<AccumPixel>, Vec<u32>) {
     let scene = Scene::default_scene();
     let settings = RenderSettings { width: 61, height: 47, spp: 8, ..scene.render };
     let params = scene.frame_params(&settings, 3, 7);
-    let r =
-        render_tiled(device, params, &scene.gpu_walls(), &scene.gpu_spheres(), 8, 3, tiles, Some((0.5, 1)), |_, _| {})
-            .expect("render");
+    let r = render_tiled(
+        device,
+        params,
+        &scene.gpu_walls(),
+        &scene.gpu_spheres(),
+        0..8,
+        3,
+        tiles,
+        Some((0.5, 1)),
+        |_, _| {},
+    )
+    .expect("render");
     (r.accum, r.display.expect("display asked for"))
 }
 

@@ -27,6 +27,8 @@ enum Command {
     Bench(BenchArgs),
     /// Compare an EXR with a reference EXR: MSE, RMSE, relMSE, MAPE, and region means.
     Compare(CompareArgs),
+    /// Join the parts of a split render (`render --parts`) into its image.
+    Merge(MergeArgs),
 }
 
 #[derive(Args, Clone, Default)]
@@ -161,6 +163,22 @@ enum TonemapArg {
     Clamp,
 }
 
+#[derive(Args)]
+struct MergeArgs {
+    /// The .ptpart files, in any order.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Output file: .png (exposure, tone map, sRGB) or .exr (linear mean radiance).
+    #[arg(long)]
+    out: PathBuf,
+    /// Exposure in stops, PNG only.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone mapper, PNG only.
+    #[arg(long, value_enum, default_value_t = TonemapArg::Aces)]
+    tonemap: TonemapArg,
+}
+
 #[derive(Args, Clone)]
 struct RenderArgs {
     /// Scene file (TOML); the built-in default scene when absent.
@@ -200,6 +218,15 @@ struct RenderArgs {
     /// Where the random numbers come from.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     sampler: SamplerArg,
+    /// Cut the render into this many parts by sample range and render one
+    /// of them to a .ptpart file (`{part}` in --out becomes its index);
+    /// `pathtracer merge` joins the parts.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    parts: Option<u32>,
+    /// Which part to render, from 0 [default: JOB_COMPLETION_INDEX, else
+    /// SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN].
+    #[arg(long)]
+    part: Option<u32>,
 }
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
@@ -223,11 +250,13 @@ impl Default for RenderArgs {
 
 fn main() {
     quiet_vulkan_device_select();
+    exit_quietly_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::View(args)) => commands::view::run(&args),
         Some(Command::Render(args)) => commands::render::run(&args),
         Some(Command::Compare(args)) => commands::compare::run(&args),
+        Some(Command::Merge(args)) => commands::merge::run(&args),
         Some(Command::Accuracy(args)) => commands::accuracy::run(&args),
         Some(Command::Bench(args)) => commands::bench::run(&args),
         None if viewer::display_available() => {
@@ -253,6 +282,23 @@ fn main() {
 /// `NODEVICE_SELECT`, which the Vulkan loader reads; wgpu still picks the
 /// adapter by power preference. A user's own setting of either variable
 /// wins.
+/// `pathtracer compare ... | head` closes stdout early. Rust ignores
+/// SIGPIPE, so the next `println!` would panic; a command-line tool should
+/// stop quietly instead, as it does with the signal's default action.
+fn exit_quietly_on_closed_pipe() {
+    #[cfg(unix)]
+    {
+        unsafe extern "C" {
+            fn signal(signum: i32, handler: usize) -> usize;
+        }
+        const SIGPIPE: i32 = 13;
+        const SIG_DFL: usize = 0;
+        // SAFETY: restores the default action of one signal, before any
+        // other thread exists; `signal` is async-signal-safe to call here.
+        unsafe { signal(SIGPIPE, SIG_DFL) };
+    }
+}
+
 fn quiet_vulkan_device_select() {
     let unset = |name| std::env::var_os(name).is_none();
     if unset("XDG_RUNTIME_DIR") && unset("WAYLAND_DISPLAY") && unset("NODEVICE_SELECT") {

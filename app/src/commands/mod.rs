@@ -4,6 +4,7 @@
 pub mod accuracy;
 pub mod bench;
 pub mod compare;
+pub mod merge;
 pub mod render;
 pub mod view;
 

@@ -1,10 +1,12 @@
 //! `pathtracer render`: a scene to a PNG or EXR file, with a progress bar.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
 use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
 use pt_render::output::{self, OutputFormat};
+use pt_render::parts;
 use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
 use pt_render::{Device, GpuContext, RenderSettings};
 
@@ -18,7 +20,23 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
     }
     // Everything the user gave is checked before any work starts, and the
     // output's folder must take a file: a bad argument never costs a render.
-    let format = output::check_writable(&args.out)?;
+    let split = match args.parts {
+        Some(parts) => Some((part_index(args.part, parts)?, parts)),
+        None if args.part.is_some() => anyhow::bail!("--part needs --parts: how many parts the render is cut into"),
+        None => None,
+    };
+    let out = match split {
+        Some((part, _)) => PathBuf::from(args.out.to_string_lossy().replace("{part}", &part.to_string())),
+        None => args.out.clone(),
+    };
+    let format = output::check_writable(&out)?;
+    if split.is_some() != (format == OutputFormat::Part) {
+        anyhow::bail!(
+            "{}: a split render (--parts) writes a .{} file, and only a split render does",
+            out.display(),
+            parts::EXTENSION
+        );
+    }
     let scene = load_scene(args.scene.as_ref())?;
     let settings = RenderSettings {
         width: args.width.unwrap_or(scene.render.width),
@@ -37,6 +55,10 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
     }
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
+    let samples = match split {
+        Some((part, parts)) => parts::part_samples(settings.spp, args.spp_per_frame, part, parts),
+        None => 0..settings.spp,
+    };
     // The context outlives the renderer made on it.
     let ctx = match args.backend {
         BackendArg::Gpu => Some(GpuContext::new().context("cannot start the GPU renderer")?),
@@ -51,23 +73,27 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         let tiles = device_tiles(device, settings.width, settings.height);
         eprintln!("{}", device.description());
         eprintln!(
-            "rendering {}x{}, {} spp, max {} bounces, seed {}{}",
+            "rendering {}x{}, {} spp, max {} bounces, seed {}{}{}",
             settings.width,
             settings.height,
             settings.spp,
             settings.max_bounces,
             args.seed,
+            match split {
+                Some((part, parts)) => format!(", part {part} of {parts}: samples {}..{}", samples.start, samples.end),
+                None => String::new(),
+            },
             if tiles.len() > 1 { format!(", in {} tiles of rows", tiles.len()) } else { String::new() }
         );
-        let spp = settings.spp as u64;
-        let bar = spp_progress_bar(settings.spp.saturating_mul(tiles.len() as u32));
+        let spp = samples.len() as u64;
+        let bar = spp_progress_bar((spp as u32).saturating_mul(tiles.len() as u32));
         bar.enable_steady_tick(Duration::from_millis(200));
         let result = render_tiled(
             device,
             params,
             &walls,
             &spheres,
-            settings.spp,
+            samples.clone(),
             args.spp_per_frame,
             &tiles,
             display,
@@ -86,14 +112,57 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
     };
     let stats = image.stats;
 
-    match (format, image.display) {
-        (OutputFormat::Png, Some(rgba)) => output::write_png(&args.out, settings.width, settings.height, &rgba)?,
-        _ => output::write_exr(&args.out, settings.width, settings.height, &output::mean_radiance(&image.accum))?,
+    match (format, image.display, split) {
+        (OutputFormat::Png, Some(rgba), _) => output::write_png(&out, settings.width, settings.height, &rgba)?,
+        (OutputFormat::Part, _, Some((part, parts))) => {
+            let header = parts::PartHeader {
+                render: parts::render_hash(&scene, &settings, args.seed, args.spp_per_frame, params.flags),
+                width: settings.width,
+                height: settings.height,
+                spp: settings.spp,
+                first_sample: samples.start,
+                end_sample: samples.end,
+                part,
+                parts,
+            };
+            parts::write_part(&out, &header, &image.accum)?;
+        }
+        _ => output::write_exr(&out, settings.width, settings.height, &output::mean_radiance(&image.accum))?,
     }
     println!("adapter: {}", device.description());
     println!("time: {:.3} s", stats.elapsed.as_secs_f64());
     println!("samples per second: {:.3e}", stats.samples_per_second());
     println!("non-finite samples: {}", stats.non_finite);
-    println!("wrote {}", args.out.display());
+    println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The index of this process's part of a render cut into `parts`: `--part`,
+/// else the index its cluster engine gives the task, `JOB_COMPLETION_INDEX`
+/// (Kubernetes Indexed Jobs, from 0) or `SLURM_ARRAY_TASK_ID` (Slurm job
+/// arrays, counted from `SLURM_ARRAY_TASK_MIN`).
+fn part_index(part: Option<u32>, parts: u32) -> Result<u32> {
+    let from_env = |name: &str| -> Result<Option<u32>> {
+        std::env::var(name)
+            .ok()
+            .map(|v| v.trim().parse::<u32>().with_context(|| format!("{name}={v:?} is not a part index")))
+            .transpose()
+    };
+    let index = match part {
+        Some(k) => k,
+        None => match (from_env("JOB_COMPLETION_INDEX")?, from_env("SLURM_ARRAY_TASK_ID")?) {
+            (Some(k), _) => k,
+            (None, Some(id)) => id
+                .checked_sub(from_env("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0))
+                .with_context(|| format!("SLURM_ARRAY_TASK_ID={id} is below SLURM_ARRAY_TASK_MIN"))?,
+            (None, None) => anyhow::bail!(
+                "--parts {parts} needs this part's index: --part K, or JOB_COMPLETION_INDEX (Kubernetes Indexed Job) \
+                 or SLURM_ARRAY_TASK_ID (Slurm job array) in the environment"
+            ),
+        },
+    };
+    if index >= parts {
+        anyhow::bail!("part {index} does not exist in a render cut into {parts} parts (indices 0 to {})", parts - 1);
+    }
+    Ok(index)
 }

@@ -54,6 +54,13 @@ impl CpuRenderer {
         self.next_frame += 1;
     }
 
+    /// Continues a render that stopped after `frames` frames and `samples`
+    /// samples per pixel, as [`crate::GpuRenderer::start_at`].
+    pub fn start_at(&mut self, frames: u32, samples: u32) {
+        self.next_frame = frames;
+        self.samples_done = samples;
+    }
+
     /// Frames accumulated so far.
     pub fn frames(&self) -> u32 {
         self.next_frame

@@ -6,6 +6,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod metrics;
 pub mod output;
+pub mod parts;
 pub mod renderer;
 pub mod scene;
 

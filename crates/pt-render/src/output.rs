@@ -8,8 +8,11 @@ use pt_core::AccumPixel;
 /// Errors writing an image.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    /// The extension is neither `.png` nor `.exr`.
-    #[error("{0}: unsupported output format: use a .png (tone-mapped sRGB) or .exr (linear radiance) file name")]
+    /// The extension is none of `.png`, `.exr` and `.ptpart`.
+    #[error(
+        "{0}: unsupported output format: use a .png (tone-mapped sRGB) or .exr (linear radiance) file name, \
+         or .ptpart for a part of a split render"
+    )]
     Format(PathBuf),
     /// The file or its folder cannot be written.
     #[error("{path}: cannot write the output file: {source}")]
@@ -48,6 +51,8 @@ pub enum OutputFormat {
     Png,
     /// Linear mean radiance, 32-bit float RGB.
     Exr,
+    /// A part of a split render: per-pixel sums (`crate::parts`).
+    Part,
 }
 
 /// The format an output path asks for, by extension.
@@ -55,6 +60,7 @@ pub fn output_format(path: &Path) -> Result<OutputFormat, OutputError> {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("png") => Ok(OutputFormat::Png),
         Some("exr") => Ok(OutputFormat::Exr),
+        Some(crate::parts::EXTENSION) => Ok(OutputFormat::Part),
         _ => Err(OutputError::Format(path.to_owned())),
     }
 }

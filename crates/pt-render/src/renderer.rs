@@ -1,6 +1,7 @@
 //! One interface over the GPU and CPU backends, and the progressive render
 //! loop that `pathtracer render` and the tests drive.
 
+use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use pt_core::{AccumPixel, FrameParams, Sphere, Tile, Wall};
@@ -83,6 +84,15 @@ impl<'a> Renderer<'a> {
         match self {
             Renderer::Gpu(_, r) => r.submit_frame(samples),
             Renderer::Cpu(r) => r.render_frame(samples),
+        }
+    }
+
+    /// Continues a render that stopped after `frames` frames and `samples`
+    /// samples per pixel: the next frames are those of the whole render.
+    pub fn start_at(&mut self, frames: u32, samples: u32) {
+        match self {
+            Renderer::Gpu(_, r) => r.start_at(frames, samples),
+            Renderer::Cpu(r) => r.start_at(frames, samples),
         }
     }
 
@@ -221,23 +231,26 @@ pub struct TiledRender {
 
 /// Renders the image of `params` (whose tile is ignored) in `tiles`, bands
 /// of whole rows from [`row_bands`] or [`device_tiles`], one renderer at a
-/// time: `spp` samples per pixel in frames of at most `per_frame`, and the
-/// display pass with `display` = (exposure, tone mapper) when given.
-/// `progress(tile, samples done in it)` follows [`render_progressive`].
-/// Pixels keep their image coordinates, so the result is the one a single
-/// tile would give.
+/// time: the samples per pixel `samples` of the whole render (all of them
+/// from 0, or a part from [`crate::parts::part_samples`], which starts on a
+/// frame boundary) in frames of at most `per_frame`, and the display pass
+/// with `display` = (exposure, tone mapper) when given. `progress(tile,
+/// samples done in it)` follows [`render_progressive`]. Pixels keep their
+/// image coordinates and frames their indices, so the result is the one a
+/// single tile would give.
 #[allow(clippy::too_many_arguments)]
 pub fn render_tiled(
     device: Device<'_>,
     params: FrameParams,
     walls: &[Wall],
     spheres: &[Sphere],
-    spp: u32,
+    samples: Range<u32>,
     per_frame: u32,
     tiles: &[Tile],
     display: Option<(f32, u32)>,
     mut progress: impl FnMut(usize, u32),
 ) -> Result<TiledRender, GpuError> {
+    let per_frame = per_frame.max(1);
     let mut out = TiledRender {
         accum: Vec::with_capacity(params.width as usize * params.height as usize),
         display: display.map(|_| Vec::new()),
@@ -245,6 +258,8 @@ pub fn render_tiled(
     };
     for (i, &tile) in tiles.iter().enumerate() {
         let mut renderer = Renderer::new(device, FrameParams { tile, ..params }, walls, spheres)?;
+        renderer.start_at(samples.start / per_frame, samples.start);
+        let spp = samples.end.saturating_sub(samples.start);
         let (accum, stats) = render_progressive(&mut renderer, spp, per_frame, |done| progress(i, done))?;
         out.accum.extend_from_slice(&accum);
         if let (Some((exposure, tonemap)), Some(rgba)) = (display, out.display.as_mut()) {

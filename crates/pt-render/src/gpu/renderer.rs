@@ -204,6 +204,14 @@ impl GpuRenderer {
         self.samples_done = 0;
     }
 
+    /// Continues a render that stopped after `frames` frames and `samples`
+    /// samples per pixel: the next frame gets that frame index and Sobol
+    /// offset, as it would have in one render (a part of a split render).
+    pub fn start_at(&mut self, frames: u32, samples: u32) {
+        self.next_frame = frames;
+        self.samples_done = samples;
+    }
+
     /// Frames accumulated since the last reset.
     pub fn frames(&self) -> u32 {
         self.next_frame
