@@ -159,6 +159,7 @@ fn camera(position: Vec3, look_at: Vec3, vfov_degrees: f32) -> CameraDesc {
 
 fn empty_scene(cam: CameraDesc) -> Scene {
     Scene {
+        origin: DVec3::ZERO,
         camera: cam,
         light: SphereLight::new(Vec3::new(0.0, -1e4, 0.0), 1.0, Vec3::ZERO),
         walls: vec![],
@@ -467,13 +468,27 @@ fn transformed(scale: f32, offset: Vec3) -> Scene {
     s
 }
 
+/// The default scene moved by `offset` along every axis, as a scene file
+/// far from the origin gives it: written with its world coordinates in
+/// f64 and read back, so the loader's camera-relative coordinates are what
+/// is tested.
+fn moved(offset: f64) -> Scene {
+    let mut s = Scene::default_scene();
+    s.origin += DVec3::splat(offset);
+    Scene::from_toml(&s.to_toml(), std::path::Path::new("<moved scene>")).expect("a moved default scene is valid")
+}
+
 fn metamorphic(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
     for (name, scene) in [
         ("scene scaled by 1e-3", transformed(1e-3, Vec3::ZERO)),
         ("scene scaled by 1e3", transformed(1e3, Vec3::ZERO)),
-        ("scene moved by 1e3", transformed(1.0, Vec3::splat(1e3))),
+        ("scene moved by 1e3", moved(1e3)),
+        ("scene moved by 1e4", moved(1e4)),
+        ("scene moved by 1e4 + 3.7", moved(1e4 + 3.7)),
+        ("scene moved by 1e6", moved(1e6)),
+        ("scene moved by 1e6 + 5.3", moved(1e6 + 5.3)),
     ] {
         let setup = Setup::new(scene, 24, 24, 16, 5);
         out.push(same_image_case(t, &format!("same image with the {name}"), (&ref_images, bad0), &setup, 200)?);

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
-use pt_core::glam::Vec3;
+use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
 use pt_core::{Camera, FrameParams, Geometry, Sphere, SphereLight, Tile, Wall};
 use serde::Deserialize;
@@ -75,7 +75,16 @@ pub enum SceneError {
     },
 }
 
-type V3 = Spanned<[f32; 3]>;
+/// Three numbers of a scene file, read in f64: positions far from the
+/// origin keep their precision until the camera's neighbourhood is
+/// subtracted (see [`Scene::origin`]).
+type V3 = Spanned<[f64; 3]>;
+
+/// Spacing of the grid that [`Scene::origin`] is snapped to. A power of two
+/// far above a scene's detail: scenes near the world origin keep origin 0
+/// (their coordinates are read as before), and any other origin is exact
+/// in f32 and f64 and leaves the camera within 8 units of it.
+const ORIGIN_GRID: f64 = 16.0;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -208,8 +217,17 @@ pub struct NamedSphere {
 }
 
 /// A validated scene.
+///
+/// Positions (camera, light, wall corners, sphere centres) are relative to
+/// [`Scene::origin`], a point near the camera: a file's coordinates are
+/// read in f64 and the origin subtracted before they become f32, so a scene
+/// 10^6 units from the world origin keeps the precision it would have at
+/// it. The kernel sees these camera-relative coordinates only.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
+    /// World position of the scene's own origin: the camera's position
+    /// rounded to a multiple of 16 (0 for scenes near the world origin).
+    pub origin: DVec3,
     /// The camera.
     pub camera: CameraDesc,
     /// The light.
@@ -242,7 +260,9 @@ impl Scene {
             let (line, column) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
             SceneError::Syntax { path: path.to_owned(), line, column, message: e.message().trim().to_owned() }
         })?;
-        Checker { text, path }.scene(file)
+        let camera = DVec3::from_array(*file.camera.position.get_ref());
+        let origin = if camera.is_finite() { (camera / ORIGIN_GRID).round() * ORIGIN_GRID } else { DVec3::ZERO };
+        Checker { text, path, origin }.scene(file)
     }
 
     /// Checks a scene edited in memory (the viewer's panel) against the
@@ -292,14 +312,26 @@ impl Scene {
     /// The scene as TOML that [`Scene::from_toml`] reads back unchanged.
     pub fn to_toml(&self) -> String {
         let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
+        // Positions in world coordinates: the f32 ones where the origin is 0
+        // (as they were read), else origin + position in f64, which reads
+        // back to the same f32 position.
+        let origin = self.origin;
+        let p = |p: Vec3| {
+            if origin == DVec3::ZERO {
+                v(p)
+            } else {
+                let w = origin + p.as_dvec3();
+                format!("[{:?}, {:?}, {:?}]", w.x, w.y, w.z)
+            }
+        };
         let mut s = String::new();
         let _ = writeln!(s, "background = {}\n", v(self.background));
         let c = &self.camera;
         let _ = writeln!(
             s,
             "[camera]\nposition = {}\nlook_at = {}\nup = {}\nvfov_degrees = {:?}\n",
-            v(c.position),
-            v(c.look_at),
+            p(c.position),
+            p(c.look_at),
             v(c.up),
             c.vfov_degrees
         );
@@ -311,14 +343,14 @@ impl Scene {
         );
         let l = &self.light;
         let _ =
-            writeln!(s, "[light]\ncenter = {}\nradius = {:?}\nradiance = {}\n", v(l.center), l.radius, v(l.radiance));
+            writeln!(s, "[light]\ncenter = {}\nradius = {:?}\nradiance = {}\n", p(l.center), l.radius, v(l.radiance));
         for w in &self.walls {
             let g = &w.wall;
             let _ = writeln!(
                 s,
                 "[[walls]]\nname = {:?}\ncorner = {}\nedge_u = {}\nedge_v = {}\nalbedo = {}\n",
                 w.name,
-                v(g.corner),
+                p(g.corner),
                 v(g.edge_u),
                 v(g.edge_v),
                 v(g.albedo)
@@ -330,7 +362,7 @@ impl Scene {
                 s,
                 "[[spheres]]\nname = {:?}\ncenter = {}\nradius = {:?}\nalbedo = {}\n",
                 sp.name,
-                v(g.center),
+                p(g.center),
                 g.radius,
                 v(g.albedo)
             );
@@ -351,6 +383,8 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 struct Checker<'a> {
     text: &'a str,
     path: &'a Path,
+    /// The scene's origin ([`Scene::origin`]), subtracted from positions.
+    origin: DVec3,
 }
 
 impl Checker<'_> {
@@ -363,12 +397,36 @@ impl Checker<'_> {
         })
     }
 
-    fn finite(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
+    /// The three numbers, which must be finite in f64.
+    fn finite_f64(&self, v: &V3, field: &str) -> Result<DVec3, SceneError> {
         let a = *v.get_ref();
         if a.iter().any(|x| !x.is_finite()) {
             return self.err(v.span(), field, format!("every component must be a finite number, got {a:?}"));
         }
-        Ok(Vec3::from_array(a))
+        Ok(DVec3::from_array(a))
+    }
+
+    /// A vector (a direction, an edge, a colour), which must be finite in
+    /// f32.
+    fn finite(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
+        self.in_f32(v, field, self.finite_f64(v, field)?)
+    }
+
+    /// A position, relative to the scene's origin.
+    fn position(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
+        self.in_f32(v, field, self.finite_f64(v, field)? - self.origin)
+    }
+
+    fn in_f32(&self, v: &V3, field: &str, x: DVec3) -> Result<Vec3, SceneError> {
+        let f = x.as_vec3();
+        if !f.is_finite() {
+            return self.err(
+                v.span(),
+                field,
+                format!("{:?} is too large for the renderer's 32-bit floats", v.get_ref()),
+            );
+        }
+        Ok(f)
     }
 
     fn albedo(&self, v: &V3, field: &str) -> Result<Vec3, SceneError> {
@@ -420,8 +478,8 @@ impl Checker<'_> {
         };
 
         let c = &f.camera;
-        let position = self.finite(&c.position, "camera.position")?;
-        let look_at = self.finite(&c.look_at, "camera.look_at")?;
+        let position = self.position(&c.position, "camera.position")?;
+        let look_at = self.position(&c.look_at, "camera.look_at")?;
         let up = match &c.up {
             Some(u) => self.finite(u, "camera.up")?,
             None => Vec3::Y,
@@ -455,7 +513,7 @@ impl Checker<'_> {
             return self.err(l.radiance.span(), "light.radiance", "radiance cannot be negative");
         }
         let light = SphereLight::new(
-            self.finite(&l.center, "light.center")?,
+            self.position(&l.center, "light.center")?,
             self.radius(&l.radius, "light.radius")?,
             radiance,
         );
@@ -466,7 +524,7 @@ impl Checker<'_> {
             if i == MAX_WALLS {
                 return self.err(w.corner.span(), &format!("walls[{i}]"), format!("at most {MAX_WALLS} walls"));
             }
-            let corner = self.finite(&w.corner, &field("corner"))?;
+            let corner = self.position(&w.corner, &field("corner"))?;
             let edge_u = self.finite(&w.edge_u, &field("edge_u"))?;
             let edge_v = self.finite(&w.edge_v, &field("edge_v"))?;
             let albedo = self.albedo(&w.albedo, &field("albedo"))?;
@@ -490,7 +548,7 @@ impl Checker<'_> {
                 return self.err(s.center.span(), &format!("spheres[{i}]"), format!("at most {MAX_SPHERES} spheres"));
             }
             let sphere = Sphere::new(
-                self.finite(&s.center, &field("center"))?,
+                self.position(&s.center, &field("center"))?,
                 self.radius(&s.radius, &field("radius"))?,
                 self.albedo(&s.albedo, &field("albedo"))?,
             );
@@ -498,6 +556,7 @@ impl Checker<'_> {
         }
 
         Ok(Scene {
+            origin: self.origin,
             camera: CameraDesc { position, look_at, up, vfov_degrees: fov },
             light,
             walls,
