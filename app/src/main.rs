@@ -163,6 +163,16 @@ enum TonemapArg {
     Clamp,
 }
 
+impl TonemapArg {
+    /// The kernel's `TONEMAP_*` value.
+    fn code(self) -> u32 {
+        match self {
+            TonemapArg::Aces => pt_core::params::TONEMAP_ACES,
+            TonemapArg::Clamp => pt_core::params::TONEMAP_CLAMP,
+        }
+    }
+}
+
 #[derive(Args)]
 struct MergeArgs {
     /// The .ptpart files, in any order.

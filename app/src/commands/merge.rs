@@ -1,12 +1,11 @@
 //! `pathtracer merge`: the parts of a split render joined into its image.
 
 use anyhow::{Context, Result};
-use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
 use pt_core::tonemap::{display_color, pack_rgba8};
 use pt_render::output::{self, OutputFormat};
 use pt_render::parts;
 
-use crate::{MergeArgs, TonemapArg};
+use crate::MergeArgs;
 
 /// Reads every part, checks that they are parts of one render that cover
 /// its samples once, and writes the image; nothing is written on error.
@@ -22,10 +21,7 @@ pub(crate) fn run(args: &MergeArgs) -> Result<()> {
     let (header, accum) = parts::merge(read).context("cannot merge")?;
     match format {
         OutputFormat::Png => {
-            let tonemap = match args.tonemap {
-                TonemapArg::Aces => TONEMAP_ACES,
-                TonemapArg::Clamp => TONEMAP_CLAMP,
-            };
+            let tonemap = args.tonemap.code();
             let rgba: Vec<u32> =
                 accum.iter().map(|p| pack_rgba8(display_color(p.mean(), args.exposure, tonemap))).collect();
             output::write_png(&args.out, header.width, header.height, &rgba)?;

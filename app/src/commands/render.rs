@@ -4,14 +4,13 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
-use pt_core::params::{TONEMAP_ACES, TONEMAP_CLAMP};
 use pt_render::output::{self, OutputFormat};
 use pt_render::parts;
 use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
 use pt_render::{Device, GpuContext, RenderSettings};
 
 use super::{load_scene, spp_progress_bar};
-use crate::{BackendArg, RenderArgs, SamplerArg, TonemapArg};
+use crate::{BackendArg, RenderArgs, SamplerArg};
 
 /// Renders the scene to the output file.
 pub(crate) fn run(args: &RenderArgs) -> Result<()> {
@@ -45,10 +44,7 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         max_bounces: args.max_bounces.unwrap_or(scene.render.max_bounces),
         rr_start: scene.render.rr_start,
     };
-    let tonemap = match args.tonemap {
-        TonemapArg::Aces => TONEMAP_ACES,
-        TonemapArg::Clamp => TONEMAP_CLAMP,
-    };
+    let tonemap = args.tonemap.code();
     let mut params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
     match args.sampler {
         SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
