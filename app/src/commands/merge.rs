@@ -17,8 +17,7 @@ pub(crate) fn run(args: &MergeArgs) -> Result<()> {
     if format == OutputFormat::Part {
         anyhow::bail!("{}: merge writes the image, a .png or .exr file", args.out.display());
     }
-    let read: Vec<_> = args.parts.iter().map(|p| parts::read_part(p)).collect::<Result<_, _>>()?;
-    let (header, accum) = parts::merge(read).context("cannot merge")?;
+    let (header, accum) = parts::merge(&args.parts).context("cannot merge")?;
     match format {
         OutputFormat::Png => {
             let tonemap = args.tonemap.code();

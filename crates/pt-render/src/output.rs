@@ -84,7 +84,10 @@ pub fn check_writable(path: &Path) -> Result<OutputFormat, OutputError> {
 }
 
 /// Writes `path` atomically: encode into a temporary sibling, then rename.
-fn write_atomic(path: &Path, save: impl FnOnce(&Path) -> Result<(), image::ImageError>) -> Result<(), OutputError> {
+pub(crate) fn write_atomic(
+    path: &Path,
+    save: impl FnOnce(&Path) -> Result<(), image::ImageError>,
+) -> Result<(), OutputError> {
     let tmp = temp_path(path);
     if let Err(source) = save(&tmp) {
         let _ = std::fs::remove_file(&tmp);

@@ -22,7 +22,7 @@
 //!   Kahan compensation of the sum (3 x f32) and the number of non-finite
 //!   samples discarded (u32), as the accumulation buffer holds them.
 
-use std::io::Write as _;
+use std::io::Read as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -30,6 +30,7 @@ use pt_core::AccumPixel;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::output::{OutputError, write_atomic};
 use crate::scene::{RenderSettings, Scene};
 
 /// The first bytes of a part file.
@@ -141,56 +142,64 @@ pub struct Part {
     pub accum: Vec<AccumPixel>,
 }
 
-/// Writes a part: to a temporary file beside `path`, renamed into place
-/// once complete, so that a part that exists is whole.
-pub fn write_part(path: &Path, header: &PartHeader, accum: &[AccumPixel]) -> Result<(), PartError> {
-    let io = |source| PartError::Io { path: path.to_path_buf(), source };
+/// Writes a part, atomically as every output file: a part that exists is
+/// whole.
+pub fn write_part(path: &Path, header: &PartHeader, accum: &[AccumPixel]) -> Result<(), OutputError> {
     let text = toml::to_string(header).expect("a part header serialises");
     let mut bytes = Vec::with_capacity(12 + text.len() + std::mem::size_of_val(accum));
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&(text.len() as u32).to_le_bytes());
     bytes.extend_from_slice(text.as_bytes());
     bytes.extend_from_slice(bytemuck::cast_slice(accum));
-    let mut temp = path.as_os_str().to_owned();
-    temp.push(".partial");
-    let temp = PathBuf::from(temp);
-    let mut file = std::fs::File::create(&temp).map_err(io)?;
-    file.write_all(&bytes).and_then(|()| file.sync_all()).map_err(io)?;
-    std::fs::rename(&temp, path).map_err(io)
+    write_atomic(path, |tmp| std::fs::write(tmp, &bytes).map_err(image::ImageError::IoError))
 }
 
-/// Reads a part file.
-pub fn read_part(path: &Path) -> Result<Part, PartError> {
-    let bytes = std::fs::read(path).map_err(|source| PartError::Io { path: path.to_path_buf(), source })?;
+/// Reads a part file's header without its pixels, checking that the file
+/// holds exactly the pixels the header says; returns the header and the
+/// pixels' offset in the file.
+pub fn read_header(path: &Path) -> Result<(PartHeader, u64), PartError> {
+    let io = |source| PartError::Io { path: path.to_path_buf(), source };
     let bad = |reason: &str| PartError::Format { path: path.to_path_buf(), reason: reason.to_string() };
-    let rest = bytes.strip_prefix(MAGIC.as_slice()).ok_or_else(|| bad("wrong magic bytes"))?;
-    let (len, rest) = rest.split_first_chunk::<4>().ok_or_else(|| bad("no header length"))?;
-    let len = u32::from_le_bytes(*len) as usize;
-    let (text, pixels) = rest.split_at_checked(len).ok_or_else(|| bad("header cut short"))?;
-    let text = std::str::from_utf8(text).map_err(|_| bad("header is not UTF-8"))?;
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut start = [0u8; 12];
+    file.read_exact(&mut start).map_err(|_| bad("wrong magic bytes"))?;
+    let (magic, len) = start.split_at(8);
+    if magic != MAGIC {
+        return Err(bad("wrong magic bytes"));
+    }
+    let len = u32::from_le_bytes(len.try_into().expect("4 bytes")) as u64;
+    let mut text = Vec::new();
+    (&mut file).take(len).read_to_end(&mut text).map_err(io)?;
+    if text.len() as u64 != len {
+        return Err(bad("header cut short"));
+    }
+    let text = std::str::from_utf8(&text).map_err(|_| bad("header is not UTF-8"))?;
     let header: PartHeader = toml::from_str(text).map_err(|e| bad(&format!("header: {e}")))?;
-    let expected = header.width as usize * header.height as usize * size_of::<AccumPixel>();
-    if pixels.len() != expected {
+    let pixels = file.metadata().map_err(io)?.len().saturating_sub(12 + len);
+    let expected = header.width as u64 * header.height as u64 * size_of::<AccumPixel>() as u64;
+    if pixels != expected {
         return Err(bad(&format!(
-            "{} bytes of pixels for {}x{}, expected {expected}",
-            pixels.len(),
-            header.width,
-            header.height
+            "{pixels} bytes of pixels for {}x{}, expected {expected}",
+            header.width, header.height
         )));
     }
-    let accum = bytemuck::pod_collect_to_vec(pixels);
+    Ok((header, 12 + len))
+}
+
+/// Reads a part file, header and pixels.
+pub fn read_part(path: &Path) -> Result<Part, PartError> {
+    let (header, offset) = read_header(path)?;
+    let bytes = std::fs::read(path).map_err(|source| PartError::Io { path: path.to_path_buf(), source })?;
+    let accum = bytemuck::pod_collect_to_vec(&bytes[offset as usize..]);
     Ok(Part { path: path.to_path_buf(), header, accum })
 }
 
-/// Merges parts given in any order into the accumulation of the whole
-/// render: the per-pixel sums added in f64, then rounded once. Refuses
-/// parts of different renders and reports every range of samples missing
-/// or covered twice.
-pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<AccumPixel>), PartError> {
-    let first = parts.first().ok_or(PartError::Empty)?;
-    let (h0, path0) = (first.header.clone(), first.path.clone());
-    for p in &parts[1..] {
-        let h = &p.header;
+/// Checks that `parts` (file, header) belong to one render and cover its
+/// samples exactly once; names every foreign part, and every range of
+/// samples missing or covered twice. Returns the render's header.
+pub fn check(parts: &[(PathBuf, PartHeader)]) -> Result<PartHeader, PartError> {
+    let (path0, h0) = parts.first().ok_or(PartError::Empty)?;
+    for (path, h) in &parts[1..] {
         let what = if h.render != h0.render {
             Some("scene or settings".to_string())
         } else if (h.width, h.height, h.spp) != (h0.width, h0.height, h0.spp) {
@@ -202,12 +211,12 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<AccumPixel>), PartErro
             None
         };
         if let Some(what) = what {
-            return Err(PartError::Mismatch { path: p.path.clone(), first: path0, what });
+            return Err(PartError::Mismatch { path: path.clone(), first: path0.clone(), what });
         }
     }
 
     let mut ranges: Vec<(Range<u32>, &Path)> =
-        parts.iter().map(|p| (p.header.first_sample..p.header.end_sample, p.path.as_path())).collect();
+        parts.iter().map(|(path, h)| (h.first_sample..h.end_sample, path.as_path())).collect();
     ranges.sort_by_key(|(r, _)| (r.start, r.end));
     let mut problems = Vec::new();
     let mut covered = 0u32;
@@ -228,12 +237,23 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<AccumPixel>), PartErro
     if !problems.is_empty() {
         return Err(PartError::Coverage { spp: h0.spp, problems: problems.join("; ") });
     }
+    Ok(PartHeader { first_sample: 0, end_sample: h0.spp, part: 0, parts: 1, ..h0.clone() })
+}
 
-    let pixels = h0.width as usize * h0.height as usize;
+/// Merges the part files `paths`, given in any order, into the
+/// accumulation of the whole render: every header is [`check`]ed first,
+/// then the parts are read one at a time (memory holds one part and the
+/// sums) and their per-pixel sums added in f64, rounded once at the end.
+pub fn merge(paths: &[PathBuf]) -> Result<(PartHeader, Vec<AccumPixel>), PartError> {
+    let headers: Vec<(PathBuf, PartHeader)> =
+        paths.iter().map(|p| read_header(p).map(|(h, _)| (p.clone(), h))).collect::<Result<_, _>>()?;
+    let header = check(&headers)?;
+    let pixels = header.width as usize * header.height as usize;
     let mut sums = vec![[0f64; 3]; pixels];
     let mut merged = vec![AccumPixel::default(); pixels];
-    for p in &parts {
-        for ((sum, m), a) in sums.iter_mut().zip(&mut merged).zip(&p.accum) {
+    for path in paths {
+        let part = read_part(path)?;
+        for ((sum, m), a) in sums.iter_mut().zip(&mut merged).zip(&part.accum) {
             // The compensation holds the low part lost from `sum`, negated.
             let exact = a.sum.as_dvec3() - a.compensation.as_dvec3();
             for c in 0..3 {
@@ -246,7 +266,6 @@ pub fn merge(parts: Vec<Part>) -> Result<(PartHeader, Vec<AccumPixel>), PartErro
     for (m, s) in merged.iter_mut().zip(&sums) {
         m.sum = pt_core::glam::DVec3::from_array(*s).as_vec3();
     }
-    let header = PartHeader { first_sample: 0, end_sample: h0.spp, part: 0, parts: 1, ..h0 };
     Ok((header, merged))
 }
 
@@ -271,8 +290,8 @@ mod tests {
         assert_eq!(part_samples(4096, 64, 3, 16), 768..1024);
     }
 
-    fn part(first: u32, end: u32, render: &str) -> Part {
-        let header = PartHeader {
+    fn header(first: u32, end: u32, render: &str) -> PartHeader {
+        PartHeader {
             render: render.into(),
             width: 2,
             height: 1,
@@ -281,26 +300,40 @@ mod tests {
             end_sample: end,
             part: 0,
             parts: 2,
-        };
+        }
+    }
+
+    fn named(first: u32, end: u32, render: &str) -> (PathBuf, PartHeader) {
+        (PathBuf::from(format!("p{first}")), header(first, end, render))
+    }
+
+    /// Writes a part of the 2x1 image whose pixels sum `first` over
+    /// `end - first` samples into `dir`.
+    fn part_file(dir: &Path, first: u32, end: u32) -> PathBuf {
         let px =
             AccumPixel { sum: pt_core::glam::Vec3::splat(first as f32), samples: end - first, ..Default::default() };
-        Part { path: PathBuf::from(format!("p{first}")), header, accum: vec![px; 2] }
+        let path = dir.join(format!("p{first}.ptpart"));
+        write_part(&path, &header(first, end, "a"), &[px; 2]).unwrap();
+        path
     }
 
     /// Case: parts in any order add up; gaps, overlaps and foreign parts
     /// are named.
     #[test]
     fn merge_adds_parts_and_names_what_is_wrong() {
-        let (h, m) = merge(vec![part(4, 8, "a"), part(0, 4, "a")]).unwrap();
+        let dir = std::env::temp_dir().join(format!("pt-merge-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (h, m) = merge(&[part_file(&dir, 4, 8), part_file(&dir, 0, 4)]).unwrap();
         assert_eq!((h.first_sample, h.end_sample), (0, 8));
         assert_eq!((m[0].sum.x, m[0].samples), (4.0, 8));
-        let e = merge(vec![part(0, 2, "a"), part(4, 6, "a")]).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let e = check(&[named(0, 2, "a"), named(4, 6, "a")]).unwrap_err().to_string();
         assert!(e.contains("samples 2..4 missing") && e.contains("samples 6..8 missing"), "{e}");
-        let e = merge(vec![part(0, 6, "a"), part(4, 8, "a")]).unwrap_err().to_string();
+        let e = check(&[named(0, 6, "a"), named(4, 8, "a")]).unwrap_err().to_string();
         assert!(e.contains("samples 4..6 covered twice"), "{e}");
-        let e = merge(vec![part(0, 4, "a"), part(4, 8, "b")]).unwrap_err().to_string();
+        let e = check(&[named(0, 4, "a"), named(4, 8, "b")]).unwrap_err().to_string();
         assert!(e.contains("p4 is a part of another render than p0"), "{e}");
-        assert!(matches!(merge(Vec::new()), Err(PartError::Empty)));
+        assert!(matches!(check(&[]), Err(PartError::Empty)));
     }
 
     /// Case: a part file reads back as written; a cut one is an error.
@@ -308,11 +341,11 @@ mod tests {
     fn part_files_round_trip_and_cut_ones_are_refused() {
         let dir = std::env::temp_dir().join(format!("pt-parts-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let p = part(0, 4, "a");
-        let path = dir.join("a.ptpart");
-        write_part(&path, &p.header, &p.accum).unwrap();
+        let path = part_file(&dir, 0, 4);
         let back = read_part(&path).unwrap();
-        assert_eq!((back.header, back.accum), (p.header, p.accum));
+        assert_eq!(back.header, header(0, 4, "a"));
+        let px = AccumPixel { sum: pt_core::glam::Vec3::ZERO, samples: 4, ..Default::default() };
+        assert_eq!(back.accum, [px; 2]);
         let bytes = std::fs::read(&path).unwrap();
         std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
         assert!(read_part(&path).unwrap_err().to_string().contains("bytes of pixels"));

@@ -180,8 +180,8 @@ pub fn render_progressive(
 }
 
 /// Renders `spp` samples per pixel in frames of at most `per_frame` on
-/// `device` and returns the accumulation: a whole render for tests and the
-/// accuracy suite.
+/// `device` and returns the accumulation: [`render_progressive`] without
+/// progress, a whole render for tests and the accuracy suite.
 pub fn render_accum(
     device: Device<'_>,
     params: FrameParams,
@@ -190,13 +190,8 @@ pub fn render_accum(
     spp: u32,
     per_frame: u32,
 ) -> Result<Vec<AccumPixel>, GpuError> {
-    let per_frame = per_frame.max(1);
     let mut renderer = Renderer::new(device, params, walls, spheres)?;
-    for done in (0..spp).step_by(per_frame as usize) {
-        renderer.frame(per_frame.min(spp - done));
-    }
-    renderer.wait()?;
-    renderer.accum()
+    Ok(render_progressive(&mut renderer, spp, per_frame, |_| {})?.0)
 }
 
 /// The tiles of a `width` x `height` image: bands of whole rows, each of at
