@@ -1,4 +1,4 @@
-//! The progressive GPU renderer for one scene and image size.
+//! The progressive GPU renderer for one scene and image tile.
 
 use pt_core::small_scene::smallest_fit;
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
@@ -8,7 +8,8 @@ use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
 use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline};
 use super::{GpuContext, GpuError, GpuTimer};
 
-/// The progressive GPU renderer for one scene and image size.
+/// The progressive GPU renderer for one scene and one tile of its image
+/// (`FrameParams::tile`, the whole image unless a render is tiled).
 pub struct GpuRenderer {
     device: wgpu::Device,
     queue: wgpu::Queue,
@@ -149,8 +150,9 @@ impl GpuRenderer {
         &self.params
     }
 
-    /// Replaces the parameters. A change of image size reallocates the
-    /// image buffers; the caller decides whether accumulation restarts.
+    /// Replaces the parameters. A change of tile (the image size, for an
+    /// untiled renderer) reallocates the image buffers; the caller decides
+    /// whether accumulation restarts.
     pub fn set_params(&mut self, params: FrameParams) -> Result<(), GpuError> {
         if params.tile != self.params.tile {
             let (accum, display) = Self::image_buffers(&self.device, params.tile)?;
