@@ -1,6 +1,6 @@
-//! What the viewer puts on screen: the traced image through the kernel's
-//! blit, the egui panel over it, the window surface's configuration, and
-//! screenshots of the two together.
+//! What the desktop viewer puts on screen: egui's frame (the panel, and the
+//! traced image drawn by the session's paint callback), the window
+//! surface's configuration, and screenshots of the window's content.
 
 use std::path::Path;
 
@@ -34,10 +34,6 @@ impl Viewer {
                 ..Default::default()
             })
             .forget_lifetime();
-        let (x, y) = self.image_origin;
-        pass.set_viewport(x as f32, y as f32, self.applied.width as f32, self.applied.height as f32, 0.0, 1.0);
-        self.blit.draw(&mut pass, &self.blit_group);
-        pass.set_viewport(0.0, 0.0, self.config.width as f32, self.config.height as f32, 0.0, 1.0);
         self.egui_renderer.render(&mut pass, paint_jobs, screen);
     }
 

@@ -133,6 +133,31 @@ pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Resu
     write_atomic(path, |p| img.save_with_format(p, image::ImageFormat::OpenExr))
 }
 
+/// A PNG file's bytes of packed RGBA8 display pixels (row 0 at the top),
+/// for outputs that are not files (the browser viewer's download).
+pub fn encode_png(width: u32, height: u32, rgba: &[u32]) -> image::ImageResult<Vec<u8>> {
+    let img =
+        image::RgbaImage::from_raw(width, height, bytemuck::cast_slice(rgba).to_vec()).ok_or_else(size_mismatch)?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::Png)?;
+    Ok(bytes.into_inner())
+}
+
+/// An EXR file's bytes of linear mean radiance (row 0 at the top).
+pub fn encode_exr(width: u32, height: u32, rgb: &[[f32; 3]]) -> image::ImageResult<Vec<u8>> {
+    let data: Vec<f32> = rgb.iter().flatten().copied().collect();
+    let img = image::Rgb32FImage::from_raw(width, height, data).ok_or_else(size_mismatch)?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, image::ImageFormat::OpenExr)?;
+    Ok(bytes.into_inner())
+}
+
+fn size_mismatch() -> image::ImageError {
+    image::ImageError::Parameter(image::error::ParameterError::from_kind(
+        image::error::ParameterErrorKind::DimensionMismatch,
+    ))
+}
+
 /// Reads an EXR's RGB as linear f32, row-major from the top.
 pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), image::ImageError> {
     let img = image::open(path)?.into_rgb32f();

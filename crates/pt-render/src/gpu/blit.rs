@@ -7,6 +7,7 @@ use super::kernel::kernel_module;
 use super::{GpuContext, GpuRenderer};
 
 /// Draws the display buffer onto a render target: the viewer's image.
+#[derive(Clone)]
 pub struct Blit {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,

@@ -56,18 +56,29 @@ impl GpuContext {
             .min_by_key(|a| adapter_rank(a.get_info().device_type))
             .ok_or(GpuError::NoAdapter)?;
         let adapter_info = adapter.get_info();
-        // Timestamp queries time the kernel where the adapter has them.
-        let required_features =
-            adapter.features() & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        let (device, queue) = pollster::block_on(adapter.request_device(&Self::device_descriptor(&adapter)))
+            .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name, source })?;
+        Ok(Self::from_device(adapter, device, queue))
+    }
+
+    /// What the renderer asks of a device on `adapter`: the adapter's own
+    /// limits (large images need large buffers), and timestamp queries
+    /// where the adapter has them. For callers that create the device
+    /// themselves, such as the browser viewer's window framework.
+    pub fn device_descriptor(adapter: &wgpu::Adapter) -> wgpu::DeviceDescriptor<'static> {
+        wgpu::DeviceDescriptor {
             label: Some("pathtracer"),
-            required_features,
-            // The adapter's own limits: large images need large buffers.
+            required_features: adapter.features()
+                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
             required_limits: adapter.limits(),
             ..Default::default()
-        }))
-        .map_err(|source| GpuError::RequestDevice { adapter: adapter_info.name.clone(), source })?;
+        }
+    }
 
+    /// A context on a device created elsewhere (with
+    /// [`GpuContext::device_descriptor`]), for example by a window framework
+    /// that must own the device, as in a browser.
+    pub fn from_device(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> Self {
         let failure = Arc::new(Mutex::new(None));
         let lost = failure.clone();
         device.set_device_lost_callback(move |reason, message| {
@@ -81,15 +92,15 @@ impl GpuContext {
                 f.get_or_insert(e.to_string());
             }
         }));
-        Ok(Self {
+        Self {
             device,
             queue,
-            adapter_info,
+            adapter_info: adapter.get_info(),
             adapter,
             failure,
             kernel: Default::default(),
             small_kernels: Default::default(),
-        })
+        }
     }
 
     pub(super) fn kernel(&self) -> &Kernel {
@@ -140,8 +151,17 @@ impl GpuContext {
         }
     }
 
-    /// Copies `size` bytes of `src` to the host.
+    /// Copies `size` bytes of `src` to the host (waits for the GPU).
     pub fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Result<Vec<u8>, GpuError> {
+        let pending = self.start_read(src, size);
+        self.wait()?;
+        pending.try_take().unwrap_or_else(|| Err(GpuError::DeviceLost("a buffer copy never finished".into())))
+    }
+
+    /// Starts copying `size` bytes of `src` to the host; nothing waits.
+    /// [`PendingRead::try_take`] gives the bytes once the GPU is done, which
+    /// in a browser is after control went back to the page's event loop.
+    pub fn start_read(&self, src: &wgpu::Buffer, size: u64) -> PendingRead {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size,
@@ -151,14 +171,31 @@ impl GpuContext {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(src, 0, &staging, 0, size);
         self.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
+        let mapped = Arc::new(Mutex::new(None));
+        let done = mapped.clone();
         staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
+            if let Ok(mut d) = done.lock() {
+                *d = Some(r);
+            }
         });
-        self.wait()?;
-        rx.recv().map_err(|e| GpuError::DeviceLost(e.to_string()))?.map_err(|e| GpuError::DeviceLost(e.to_string()))?;
-        let bytes = staging.get_mapped_range(..).map_err(|e| GpuError::Validation(e.to_string()))?.to_vec();
-        staging.unmap();
-        Ok(bytes)
+        PendingRead { staging, mapped }
+    }
+}
+
+/// A copy of a GPU buffer on its way to the host ([`GpuContext::start_read`]).
+pub struct PendingRead {
+    staging: wgpu::Buffer,
+    mapped: Arc<Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>,
+}
+
+impl PendingRead {
+    /// The bytes, once the copy has finished; `None` before. Never waits.
+    pub fn try_take(&self) -> Option<Result<Vec<u8>, GpuError>> {
+        let result = self.mapped.lock().ok()?.take()?;
+        Some(result.map_err(|e| GpuError::DeviceLost(e.to_string())).and_then(|()| {
+            let bytes = self.staging.get_mapped_range(..).map_err(|e| GpuError::Validation(e.to_string()))?.to_vec();
+            self.staging.unmap();
+            Ok(bytes)
+        }))
     }
 }

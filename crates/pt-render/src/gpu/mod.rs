@@ -16,7 +16,7 @@ pub mod renderer;
 pub mod timer;
 
 pub use blit::Blit;
-pub use context::GpuContext;
+pub use context::{GpuContext, PendingRead};
 pub use kernel::{TraceKernel, WORKGROUP_SHAPES};
 pub use renderer::GpuRenderer;
 pub use timer::GpuTimer;

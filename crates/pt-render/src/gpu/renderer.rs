@@ -5,6 +5,7 @@ use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, W
 use wgpu::util::DeviceExt;
 
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
+use super::context::PendingRead;
 use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline};
 use super::{GpuContext, GpuError, GpuTimer};
 
@@ -64,6 +65,10 @@ impl GpuRenderer {
     /// A renderer for `params` (size, camera, light, settings) and geometry.
     pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
         let device = ctx.device.clone();
+        // A browser resolves the scope's promise only after this call
+        // returns, so there errors reach the uncaptured-error handler
+        // (`GpuContext::check`) instead.
+        #[cfg(not(target_arch = "wasm32"))]
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let Kernel { trace_layout, display_layout, accumulate, display, .. } = ctx.kernel().clone();
 
@@ -91,6 +96,7 @@ impl GpuRenderer {
             &display_layout,
             &[(PARAMS, &params_buf), (ACCUM, &accum_buf), (DISPLAY, &display_buf)],
         );
+        #[cfg(not(target_arch = "wasm32"))]
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
@@ -363,5 +369,21 @@ impl GpuRenderer {
     pub fn read_display(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         let bytes = ctx.read_buffer(&self.display_buf, self.display_buf.size())?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// Starts copying the accumulation buffer to the host without waiting
+    /// (for a browser, where nothing may block).
+    pub fn start_read_accum(&self, ctx: &GpuContext) -> PendingRead {
+        ctx.start_read(&self.accum_buf, self.accum_buf.size())
+    }
+
+    /// Starts copying the display buffer to the host without waiting.
+    pub fn start_read_display(&self, ctx: &GpuContext) -> PendingRead {
+        ctx.start_read(&self.display_buf, self.display_buf.size())
+    }
+
+    /// Starts copying the non-finite sample count to the host without waiting.
+    pub fn start_read_non_finite(&self, ctx: &GpuContext) -> PendingRead {
+        ctx.start_read(&self.non_finite_buf, 4)
     }
 }

@@ -4,7 +4,7 @@ use egui::{Color32, RichText, Ui};
 use pt_core::glam::Vec3;
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
 
-use super::settings::{SamplesPerFrame, ViewSettings};
+use crate::settings::{SamplesPerFrame, ViewSettings};
 
 /// Live figures shown in the panel.
 #[derive(Clone, Debug, Default)]
@@ -45,7 +45,17 @@ pub struct Actions {
     pub save_scene: bool,
 }
 
-/// Text fields of file paths and the last status line.
+/// Where files come from and go, and the last file operation's result.
+#[derive(Clone, Debug, Default)]
+pub struct Files {
+    /// Path fields on a desktop; `None` in a browser, where the scene comes
+    /// from a file picker or a drop and outputs are downloads.
+    pub paths: Option<Paths>,
+    /// Result of the last file operation.
+    pub status: String,
+}
+
+/// Text fields of file paths.
 #[derive(Clone, Debug)]
 pub struct Paths {
     /// Scene file for load and save.
@@ -54,8 +64,6 @@ pub struct Paths {
     pub png: String,
     /// EXR output.
     pub exr: String,
-    /// Result of the last file operation.
-    pub status: String,
 }
 
 fn vec3_edit(ui: &mut Ui, label: &str, v: &mut Vec3, speed: f32) {
@@ -83,7 +91,7 @@ pub fn draw(
     root: &mut Ui,
     s: &mut ViewSettings,
     stats: &Stats,
-    paths: &mut Paths,
+    files: &mut Files,
     actions: &mut Actions,
 ) -> egui::Rect {
     egui::Panel::left("controls").resizable(true).default_size(320.0).max_size(480.0).show(root, |ui| {
@@ -91,10 +99,10 @@ pub fn draw(
             statistics(ui, stats);
             ui.separator();
             render(ui, s, actions);
-            scene(ui, s, paths, actions);
+            scene(ui, s, files, actions);
             camera(ui, s, actions);
             display(ui, s);
-            output(ui, paths, actions);
+            output(ui, files, actions);
         });
     });
     root.available_rect_before_wrap()
@@ -182,7 +190,7 @@ fn render(ui: &mut Ui, s: &mut ViewSettings, actions: &mut Actions) {
     });
 }
 
-fn scene(ui: &mut Ui, s: &mut ViewSettings, paths: &mut Paths, actions: &mut Actions) {
+fn scene(ui: &mut Ui, s: &mut ViewSettings, files: &mut Files, actions: &mut Actions) {
     egui::CollapsingHeader::new("Scene").default_open(false).show(ui, |ui| {
         ui.label(RichText::new("Light").strong());
         let l = &mut s.scene.light;
@@ -218,14 +226,20 @@ fn scene(ui: &mut Ui, s: &mut ViewSettings, paths: &mut Paths, actions: &mut Act
             albedo_edit(ui, &w.name, &mut w.wall.albedo);
         }
         ui.separator();
+        if let Some(paths) = &mut files.paths {
+            ui.horizontal(|ui| {
+                ui.label("file");
+                ui.text_edit_singleline(&mut paths.scene);
+            });
+        }
         ui.horizontal(|ui| {
-            ui.label("file");
-            ui.text_edit_singleline(&mut paths.scene);
-        });
-        ui.horizontal(|ui| {
-            actions.load_scene |= ui.button("load").clicked();
+            let load = if files.paths.is_some() { "load" } else { "open scene file…" };
+            actions.load_scene |= ui.button(load).clicked();
             actions.save_scene |= ui.button("save").clicked();
         });
+        if files.paths.is_none() {
+            ui.label("or drop a scene file (TOML) on the page");
+        }
     });
 }
 
@@ -258,18 +272,28 @@ fn display(ui: &mut Ui, s: &mut ViewSettings) {
     });
 }
 
-fn output(ui: &mut Ui, paths: &mut Paths, actions: &mut Actions) {
+fn output(ui: &mut Ui, files: &mut Files, actions: &mut Actions) {
     egui::CollapsingHeader::new("Output").default_open(true).show(ui, |ui| {
-        ui.horizontal(|ui| {
-            ui.text_edit_singleline(&mut paths.png);
-            actions.save_png |= ui.button("save PNG").clicked();
-        });
-        ui.horizontal(|ui| {
-            ui.text_edit_singleline(&mut paths.exr);
-            actions.save_exr |= ui.button("save EXR").clicked();
-        });
-        if !paths.status.is_empty() {
-            ui.label(&paths.status);
+        match &mut files.paths {
+            Some(paths) => {
+                ui.horizontal(|ui| {
+                    ui.text_edit_singleline(&mut paths.png);
+                    actions.save_png |= ui.button("save PNG").clicked();
+                });
+                ui.horizontal(|ui| {
+                    ui.text_edit_singleline(&mut paths.exr);
+                    actions.save_exr |= ui.button("save EXR").clicked();
+                });
+            }
+            None => {
+                ui.horizontal(|ui| {
+                    actions.save_png |= ui.button("save PNG").clicked();
+                    actions.save_exr |= ui.button("save EXR").clicked();
+                });
+            }
+        }
+        if !files.status.is_empty() {
+            ui.label(&files.status);
         }
     });
 }
