@@ -85,9 +85,12 @@ pub fn sphere_blocks(sphere: &Sphere, ray: &Ray, t_max: f32) -> bool {
     intersect_sphere(sphere.center, sphere.radius, ray, 0.0, t_max) < t_max
 }
 
-/// "No limit" for ray parameters. Not `f32::INFINITY`: naga rejects an
-/// infinite literal in a SPIR-V module.
-pub const T_FAR: f32 = f32::MAX;
+/// "No limit" for ray parameters: far beyond any scene (positions are
+/// relative to the camera, and f32 precision ends long before this). Not
+/// `f32::INFINITY`: naga rejects an infinite literal in a SPIR-V module.
+/// Not `f32::MAX`: naga writes it to WGSL as `3.4028235e38f`, which is
+/// above f32::MAX read exactly, and browsers reject the module.
+pub const T_FAR: f32 = 1e30;
 
 /// No wall to skip.
 pub const NO_WALL: u32 = u32::MAX;

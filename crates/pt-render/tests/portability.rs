@@ -97,4 +97,44 @@ fn wgsl_round_trips_with_webgpu_capabilities() {
         .unwrap_or_else(|e| panic!("naga cannot read its own WGSL: {}", e.emit_to_string(&source)));
     validate(&reparsed, Capabilities::empty(), "WGSL read back");
     assert_eq!(entry_points(&reparsed), entry_points(&module));
+
+    // Browsers read a decimal literal exactly: `3.4028235e38f`, the
+    // shortest form that reads back as f32::MAX in Rust, is above f32::MAX
+    // and Chromium rejects the module ("value cannot be represented as
+    // 'f32'"). naga accepts it, so the check is here.
+    let too_large: Vec<&str> =
+        f32_literals(&source).filter(|l| l.parse::<f64>().unwrap().abs() > f32::MAX as f64).collect();
+    assert!(too_large.is_empty(), "f32 literals a browser rejects: {too_large:?} (use a finite bound below f32::MAX)");
+}
+
+/// The f32 literals of WGSL source (`1.5f`, `3e38f`), without the suffix.
+fn f32_literals(source: &str) -> impl Iterator<Item = &str> {
+    let bytes = source.as_bytes();
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        while i < bytes.len() {
+            let start = i;
+            let starts_token = start == 0 || !(bytes[start - 1].is_ascii_alphanumeric() || bytes[start - 1] == b'_');
+            if !(starts_token && bytes[i].is_ascii_digit()) {
+                i += 1;
+                continue;
+            }
+            while i < bytes.len() && (bytes[i].is_ascii_digit() || matches!(bytes[i], b'.' | b'e' | b'E'))
+                || (i > start && matches!(bytes[i - 1], b'e' | b'E') && matches!(bytes[i], b'+' | b'-'))
+            {
+                i += 1;
+            }
+            if bytes.get(i) == Some(&b'f') {
+                i += 1;
+                return Some(&source[start..i - 1]);
+            }
+        }
+        None
+    })
+}
+
+#[test]
+fn f32_literals_are_found_in_wgsl() {
+    let found: Vec<_> = f32_literals("let a = 1.5f + x2f * 3e38f - 2.5e-3f; let b = 7u; let c = 1f;").collect();
+    assert_eq!(found, ["1.5", "3e38", "2.5e-3", "1"]);
 }
