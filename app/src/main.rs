@@ -143,6 +143,11 @@ struct CompareArgs {
     /// Side of the square regions whose means are compared, in pixels.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
     block: u32,
+    /// Fail when a region's paired t statistic (mean pixel difference over
+    /// its standard error) exceeds this: a test that both images estimate
+    /// the same image from independent samples, e.g. 5.
+    #[arg(long)]
+    max_t: Option<f64>,
 }
 
 #[derive(Copy, Clone, Debug, ValueEnum)]

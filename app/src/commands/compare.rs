@@ -47,5 +47,24 @@ pub(crate) fn run(args: &CompareArgs) -> Result<()> {
         worst.1 / regions_x,
         ["r", "g", "b"][worst.2]
     );
+    if let Some(max_t) = args.max_t {
+        let t = metrics::region_t_statistics(&image, &reference, w, h, args.block);
+        let (i, c, worst) = t
+            .iter()
+            .enumerate()
+            .flat_map(|(i, r)| (0..3).map(move |c| (i, c, r[c])))
+            .max_by(|a, b| a.2.abs().total_cmp(&b.2.abs()))
+            .context("empty image")?;
+        let at = format!("region x {}, y {}, channel {}", i % regions_x, i / regions_x, ["r", "g", "b"][c]);
+        println!("paired t over {} regions: largest |t| {:.3} ({at}), allowed {max_t}", t.len(), worst.abs());
+        if worst.abs() > max_t {
+            anyhow::bail!(
+                "{} differs from {} beyond the noise: |t| = {:.3} > {max_t} at {at}",
+                args.image.display(),
+                args.reference.display(),
+                worst.abs()
+            );
+        }
+    }
     Ok(())
 }

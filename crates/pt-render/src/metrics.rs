@@ -51,6 +51,46 @@ pub fn region_means(image: &[[f32; 3]], width: u32, height: u32, block: u32) -> 
     sums.iter().zip(&counts).map(|(s, &n)| s.map(|v| v / n as f64)).collect()
 }
 
+/// The paired t statistic of each `block` x `block` region and channel,
+/// row-major over regions: the mean of the pixel differences `I - R` over
+/// their standard error. When both images are unbiased estimates of the
+/// same image from independent samples, each is close to a standard
+/// normal draw (regions of a few hundred pixels); a bias shows as a large
+/// value. A region whose pixels agree exactly has statistic 0; one whose
+/// differences are all equal but not zero has an infinite statistic.
+pub fn region_t_statistics(
+    image: &[[f32; 3]],
+    reference: &[[f32; 3]],
+    width: u32,
+    height: u32,
+    block: u32,
+) -> Vec<[f64; 3]> {
+    let (w, h, b) = (width as usize, height as usize, block as usize);
+    let (rx, ry) = (w.div_ceil(b), h.div_ceil(b));
+    let mut diffs = vec![[const { Vec::new() }; 3]; rx * ry];
+    for y in 0..h {
+        for x in 0..w {
+            let (i, r) = (image[y * w + x], reference[y * w + x]);
+            for c in 0..3 {
+                diffs[(y / b) * rx + x / b][c].push(i[c] as f64 - r[c] as f64);
+            }
+        }
+    }
+    diffs
+        .iter()
+        .map(|region| {
+            region.each_ref().map(|d| {
+                let (mean, stderr) = mean_and_stderr(d);
+                match (mean == 0.0, stderr > 0.0) {
+                    (true, _) => 0.0,
+                    (false, true) => mean / stderr,
+                    (false, false) => mean.signum() * f64::INFINITY,
+                }
+            })
+        })
+        .collect()
+}
+
 /// Mean and standard error of the mean of independent estimates.
 pub fn mean_and_stderr(xs: &[f64]) -> (f64, f64) {
     let n = xs.len() as f64;
@@ -62,6 +102,22 @@ pub fn mean_and_stderr(xs: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn t_statistics_are_exact_on_known_differences() {
+        // One 2x1 region: differences (1, 3) in red: mean 2, sample
+        // standard deviation sqrt(2), standard error 1, t = 2. Green
+        // agrees exactly (0); blue differs by 1 everywhere (infinite).
+        let r = [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let i = [[1.0, 1.0, 1.0], [3.0, 1.0, 1.0]];
+        let t = region_t_statistics(&i, &r, 2, 1, 2);
+        assert_eq!(t.len(), 1);
+        assert!((t[0][0] - 2.0).abs() < 1e-12, "{t:?}");
+        assert_eq!(t[0][1], 0.0);
+        assert_eq!(t[0][2], f64::INFINITY);
+        // Blocks of 1: each region has one pixel, no spread.
+        assert_eq!(region_t_statistics(&i, &r, 2, 1, 1).len(), 2);
+    }
 
     #[test]
     fn metrics_match_hand_computed_values() {

@@ -18,6 +18,8 @@ pub struct Stats {
     pub samples_per_second: f64,
     /// Samples per pixel accumulated since the last reset.
     pub accumulated_spp: u64,
+    /// Milliseconds spent tracing them (the sum of the frames' times).
+    pub traced_ms: f64,
     /// Samples per pixel traced by the last frame.
     pub last_frame_spp: u32,
     /// Non-finite samples discarded since the last reset.

@@ -66,6 +66,10 @@ pub struct Session {
     last_frame: Option<Instant>,
     /// When recent frames started, for frames per second.
     frame_times: VecDeque<Instant>,
+    /// Where the image was drawn, in points (right of the panel).
+    image_rect: egui::Rect,
+    /// "reset accumulation" pressed while a frame was in flight.
+    reset_asked: bool,
 }
 
 impl Session {
@@ -104,6 +108,8 @@ impl Session {
             frames_traced: 0,
             last_frame: None,
             frame_times: VecDeque::new(),
+            image_rect: egui::Rect::NOTHING,
+            reset_asked: false,
         })
     }
 
@@ -121,11 +127,18 @@ impl Session {
             || self.settings != self.applied
             || self.in_flight.is_some()
             || self.non_finite.is_some()
+            || self.reset_asked
     }
 
     /// The traced image's size in pixels.
     pub fn image_size(&self) -> (u32, u32) {
         (self.applied.width, self.applied.height)
+    }
+
+    /// Where the last frame drew the image, in points; the panel is left
+    /// of it.
+    pub fn image_rect(&self) -> egui::Rect {
+        self.image_rect
     }
 
     /// The renderer: its display buffer is current after [`Session::frame`].
@@ -148,6 +161,7 @@ impl Session {
 
         let mut actions = Actions::default();
         let image_rect = panel::draw(ui, &mut self.settings, &self.stats, &mut self.files, &mut actions);
+        self.image_rect = image_rect;
         self.orbit_and_zoom(ui, image_rect);
         // The image fills the rectangle right of the panel, in pixels.
         let ppp = ui.pixels_per_point();
@@ -164,6 +178,7 @@ impl Session {
             // camera at its look-at point): keep the last good scene.
             self.settings.scene = self.applied.scene.clone();
         }
+        self.finish_in_flight();
         self.apply_settings(ctx, actions.reset_accumulation)?;
         self.trace(ctx)?;
         if self.display_dirty {
@@ -242,11 +257,13 @@ impl Session {
     /// Brings the renderer in line with the settings, restarting the
     /// accumulation only when [`invalidates_accumulation`] says so.
     fn apply_settings(&mut self, ctx: &GpuContext, force_reset: bool) -> Result<(), GpuError> {
-        if self.settings == self.applied && !force_reset {
-            return Ok(());
-        }
         if self.in_flight.is_some() {
             // A browser: the buffers change only between traced frames.
+            self.reset_asked |= force_reset;
+            return Ok(());
+        }
+        let force_reset = force_reset || std::mem::take(&mut self.reset_asked);
+        if self.settings == self.applied && !force_reset {
             return Ok(());
         }
         let reset = force_reset || invalidates_accumulation(&self.applied, &self.settings);
@@ -264,6 +281,7 @@ impl Session {
         if reset {
             self.renderer.reset();
             self.stats.accumulated_spp = 0;
+            self.stats.traced_ms = 0.0;
             self.stats.non_finite = 0;
             self.non_finite = None;
         }
@@ -275,10 +293,9 @@ impl Session {
 
     /// Traces one frame if tracing, adapting the samples per frame.
     fn trace(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
-        self.finish_in_flight();
         self.poll_non_finite()?;
         self.stats.tracing = self.tracing();
-        if !self.stats.tracing || self.in_flight.is_some() || self.settings != self.applied {
+        if !self.stats.tracing || self.in_flight.is_some() || self.settings != self.applied || self.reset_asked {
             if !self.stats.tracing {
                 self.stats.last_frame_spp = 0;
             }
@@ -342,6 +359,7 @@ impl Session {
     /// Records a traced frame's time, and adapts the samples per frame.
     fn traced(&mut self, spp: u32, ms: f64, gpu: bool, wall_ms: f64) {
         self.stats.trace_ms = Some((ms, gpu));
+        self.stats.traced_ms += ms;
         let pixels = self.applied.width as f64 * self.applied.height as f64;
         self.stats.samples_per_second = pixels * spp as f64 / (ms.max(1e-3) * 1e-3);
         if let SamplesPerFrame::Auto { budget_ms } = self.settings.samples_per_frame {

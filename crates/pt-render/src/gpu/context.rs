@@ -124,10 +124,14 @@ impl GpuContext {
         &self.adapter
     }
 
-    /// "name (backend, driver driver_info)", for reports.
+    /// "name (backend, driver driver_info)", for reports. A browser names
+    /// neither the adapter nor its driver.
     pub fn adapter_description(&self) -> String {
         let i = &self.adapter_info;
-        format!("{} ({:?}, {:?}, driver {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info)
+        match i.backend {
+            wgpu::Backend::BrowserWebGpu => format!("the browser's WebGPU ({:?})", i.device_type),
+            _ => format!("{} ({:?}, {:?}, driver {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info),
+        }
     }
 
     /// Whether this adapter is a software rasteriser (lavapipe).
