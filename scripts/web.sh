@@ -114,7 +114,36 @@ test_page() {
         "$dir/result.json"
 
     cp "$dir/shot.png" docs/web-viewer.png
+    speed "$bin" "$dir" "$w" "$h"
     echo "web test passed: ${w}x${h}, $(json "$dir/result.json" spp) spp, $(json "$dir/result.json" samplesPerSecond) samples/s on $(json "$dir/result.json" adapter); screenshot in docs/web-viewer.png" >&2
+}
+
+# Samples per second of the page (its frames' GPU time, from the queue's
+# completion callbacks) beside the native backends on the same image size,
+# samples and samples per frame, in the same run: docs/web-speed.md, which
+# docs/PERFORMANCE.md includes.
+speed() {
+    local bin=$1 dir=$2 w=$3 h=$4 spp per_frame=4 row backend sps
+    spp=$(json "$dir/result.json" spp)
+    {
+        echo "Default scene, ${w}x${h} pixels (the image area of a 640x360 page beside the panel), $spp spp in frames of $per_frame, 5 bounces; measured by \`./scripts/web.sh test\` on $(date -u +%Y-%m-%d), in one run, on $(nproc) cores ($(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo))."
+        echo
+        echo "| renderer | samples/s | ratio to the browser |"
+        echo "|---|---|---|"
+        local page
+        page=$(json "$dir/result.json" samplesPerSecond)
+        printf '| browser: %s, WebGPU on SwiftShader | %.3e | 1 |\n' "$(chromium --version)" "$page"
+        for backend in gpu cpu; do
+            sps=$("$bin" render --backend "$backend" --width "$w" --height "$h" --spp "$spp" --spp-per-frame "$per_frame" \
+                --out "$dir/speed-$backend.exr" 2>&1 | awk -F': ' '/^samples per second/ { print $2 }')
+            row=$("$bin" render --backend "$backend" --width 1 --height 1 --spp 1 --out "$dir/adapter.exr" 2>&1 |
+                awk -F': ' '/^adapter/ { sub(/^[^:]*: /, ""); print; exit }')
+            printf '| native %s: %s | %.3e | %.1f |\n' "$backend" "$row" "$sps" "$(python3 -c "print($sps / $page)")"
+        done
+        echo
+        echo "The page's figure is its frames' GPU time (submission to the queue's completion callback), so the panel's drawing is left out; the native figures are \`pathtracer render\`'s own."
+    } >docs/web-speed.md
+    cat docs/web-speed.md >&2
 }
 
 case "${1:-}" in

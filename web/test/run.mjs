@@ -84,6 +84,20 @@ try {
   const after = await page.evaluate(() => window.ptState);
 
   await page.screenshot({ path: join(outDir, "shot.png") });
+
+  // A browser without WebGPU: the page must say so, not show a blank canvas.
+  const bare = await browser.newPage({ viewport: { width: 640, height: 360 } });
+  await bare.addInitScript(() => delete Navigator.prototype.gpu);
+  await bare.goto(url);
+  await bare.waitForFunction(() => window.ptError, null, { timeout: 60_000 });
+  const noWebGpu = await bare.evaluate(() => ({
+    message: window.ptError,
+    shown: getComputedStyle(document.getElementById("pt-message")).display !== "none",
+    canvasHidden: getComputedStyle(document.getElementById("pt-canvas")).display === "none",
+  }));
+  if (!noWebGpu.shown || !noWebGpu.canvasHidden || !noWebGpu.message.includes("no WebGPU")) {
+    fail(`without WebGPU the page shows ${JSON.stringify(noWebGpu)}`);
+  }
   const result = {
     width: test.width,
     height: test.height,
@@ -94,6 +108,7 @@ try {
     panelWidth: test.panelWidth,
     dropStatus: after.status,
     sceneKept: after.scene === before.scene,
+    noWebGpuMessage: noWebGpu.message,
     userAgent: await page.evaluate(() => navigator.userAgent),
   };
   writeFileSync(join(outDir, "result.json"), JSON.stringify(result, null, 2) + "\n");

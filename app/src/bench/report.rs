@@ -329,6 +329,27 @@ pub(crate) fn gpu_machine_section(report: Option<&Path>) -> String {
     }
 }
 
+/// The browser viewer's speed table, written by `./scripts/web.sh test`.
+const WEB_SPEED: &str = "web-speed.md";
+
+/// The browser viewer's samples per second beside the native backends:
+/// the table `./scripts/web.sh test` leaves beside `report`, measured in
+/// one run of its own (a browser cannot run inside this bench).
+pub(crate) fn web_section(report: Option<&Path>) -> String {
+    let table = report.and_then(Path::parent).and_then(|d| std::fs::read_to_string(d.join(WEB_SPEED)).ok());
+    match table {
+        Some(table) => format!(
+            "\n## In a browser\n\nThe viewer's page (`./scripts/web.sh`) traces with the same kernel, translated to \
+             WGSL by naga in the page. From [{WEB_SPEED}]({WEB_SPEED}), which `./scripts/web.sh test` rewrites on \
+             every run:\n\n{}",
+            table.trim_end().to_owned() + "\n"
+        ),
+        None => "\n## In a browser\n\nNot measured here: `./scripts/web.sh test` writes the browser's figures to \
+                 docs/web-speed.md.\n"
+            .to_owned(),
+    }
+}
+
 /// The Mitsuba comparison: time to relMSE 1e-3, ours against Mitsuba's.
 pub(crate) fn mitsuba_section(csv: &PathBuf, points: &[Point]) -> Result<String> {
     let m = read_curve(csv)?;

@@ -4,7 +4,9 @@ use anyhow::{Context, Result};
 use pt_render::{RenderSettings, Scene, output};
 
 use super::{load_scene, machine_description, rayon_threads, spp_progress_bar};
-use crate::bench::{self, BackendKind, defaults_section, gpu_machine_section, mitsuba_section, relative_to_report};
+use crate::bench::{
+    self, BackendKind, defaults_section, gpu_machine_section, mitsuba_section, relative_to_report, web_section,
+};
 use crate::{BenchArgs, BenchWhat, SuiteBackends};
 
 /// Runs the benchmarks asked for and writes the report when asked.
@@ -93,6 +95,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         }
         report.push_str(&defaults_section(&points));
         report.push_str(&gpu_machine_section(args.report.as_deref()));
+        report.push_str(&web_section(args.report.as_deref()));
     }
 
     if let Some(path) = &args.report {

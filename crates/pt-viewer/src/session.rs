@@ -384,7 +384,7 @@ impl Session {
     /// four bytes every 16th frame and after the last, never a per-frame
     /// readback of anything sizeable.
     fn count_non_finite(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
-        if !(self.frames_traced.is_multiple_of(16) || !self.tracing()) {
+        if !self.frames_traced.is_multiple_of(16) && self.tracing() {
             return Ok(());
         }
         match self.waiting {
