@@ -132,7 +132,7 @@ speed() {
         echo "|---|---|---|"
         local page
         page=$(json "$dir/result.json" samplesPerSecond)
-        printf '| browser: %s, WebGPU on SwiftShader | %.3e | 1 |\n' "$(chromium --version)" "$page"
+        printf '| browser: %s, WebGPU on SwiftShader | %.3e | 1 |\n' "$(chromium --version 2>/dev/null)" "$page"
         for backend in gpu cpu; do
             sps=$("$bin" render --backend "$backend" --width "$w" --height "$h" --spp "$spp" --spp-per-frame "$per_frame" \
                 --out "$dir/speed-$backend.exr" 2>&1 | awk -F': ' '/^samples per second/ { print $2 }')
