@@ -136,6 +136,9 @@ pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Resu
 /// A PNG file's bytes of packed RGBA8 display pixels (row 0 at the top),
 /// for outputs that are not files (the browser viewer's download).
 pub fn encode_png(width: u32, height: u32, rgba: &[u32]) -> image::ImageResult<Vec<u8>> {
+    if rgba.len() as u64 != width as u64 * height as u64 {
+        return Err(size_mismatch());
+    }
     let img =
         image::RgbaImage::from_raw(width, height, bytemuck::cast_slice(rgba).to_vec()).ok_or_else(size_mismatch)?;
     let mut bytes = std::io::Cursor::new(Vec::new());
@@ -145,6 +148,9 @@ pub fn encode_png(width: u32, height: u32, rgba: &[u32]) -> image::ImageResult<V
 
 /// An EXR file's bytes of linear mean radiance (row 0 at the top).
 pub fn encode_exr(width: u32, height: u32, rgb: &[[f32; 3]]) -> image::ImageResult<Vec<u8>> {
+    if rgb.len() as u64 != width as u64 * height as u64 {
+        return Err(size_mismatch());
+    }
     let data: Vec<f32> = rgb.iter().flatten().copied().collect();
     let img = image::Rgb32FImage::from_raw(width, height, data).ok_or_else(size_mismatch)?;
     let mut bytes = std::io::Cursor::new(Vec::new());
@@ -168,6 +174,23 @@ pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), image::ImageEr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn encoded_files_decode_to_the_pixels() {
+        // The browser viewer's downloads: bytes, not files.
+        let rgba = [0xff00_00ffu32, 0x8000_ff00, 0x0000_0000, 0xffff_ffff, 0x1234_5678, 0x0102_0304];
+        let png = image::load_from_memory(&encode_png(3, 2, &rgba).unwrap()).unwrap().into_rgba8();
+        assert_eq!(png.dimensions(), (3, 2));
+        assert_eq!(png.as_raw().as_slice(), bytemuck::cast_slice::<u32, u8>(&rgba));
+
+        let rgb = [[0.0, 1.5, -2.0], [1e-3, 1e3, 0.25]];
+        let exr = image::load_from_memory(&encode_exr(1, 2, &rgb).unwrap()).unwrap().into_rgb32f();
+        assert_eq!(exr.dimensions(), (1, 2));
+        assert_eq!(exr.pixels().map(|p| p.0).collect::<Vec<_>>(), rgb);
+
+        assert!(encode_png(2, 2, &rgba).is_err(), "6 pixels are not 2x2");
+        assert!(encode_exr(2, 2, &rgb).is_err(), "2 pixels are not 2x2");
+    }
 
     #[test]
     fn mismatched_pixel_count_is_an_error_and_writes_nothing() {
