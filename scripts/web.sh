@@ -134,10 +134,10 @@ speed() {
         page=$(json "$dir/result.json" samplesPerSecond)
         printf '| browser: %s, WebGPU on SwiftShader | %.3e | 1 |\n' "$(chromium --version 2>/dev/null)" "$page"
         for backend in gpu cpu; do
-            sps=$("$bin" render --backend "$backend" --width "$w" --height "$h" --spp "$spp" --spp-per-frame "$per_frame" \
-                --out "$dir/speed-$backend.exr" 2>&1 | awk -F': ' '/^samples per second/ { print $2 }')
-            row=$("$bin" render --backend "$backend" --width 1 --height 1 --spp 1 --out "$dir/adapter.exr" 2>&1 |
-                awk -F': ' '/^adapter/ { sub(/^[^:]*: /, ""); print; exit }')
+            "$bin" render --backend "$backend" --width "$w" --height "$h" --spp "$spp" --spp-per-frame "$per_frame" \
+                --out "$dir/speed-$backend.exr" >"$dir/speed-$backend.log" 2>&1
+            sps=$(awk -F': ' '/^samples per second/ { print $2 }' "$dir/speed-$backend.log")
+            row=$(awk '/^adapter: / { sub(/^adapter: /, ""); print; exit }' "$dir/speed-$backend.log")
             printf '| native %s: %s | %.3e | %.1f |\n' "$backend" "$row" "$sps" "$(python3 -c "print($sps / $page)")"
         done
         echo

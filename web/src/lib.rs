@@ -72,6 +72,9 @@ struct WebViewer {
     readbacks: Vec<Readback>,
     test: Option<page::TestRequest>,
     test_started: bool,
+    /// The scene `window.ptState` shows, and its TOML: written again only
+    /// when the scene changes, not every frame.
+    reported_scene: Option<(Scene, String)>,
 }
 
 impl WebViewer {
@@ -86,7 +89,15 @@ impl WebViewer {
             session.settings.target_spp = t.spp;
         }
         ctx.check().map_err(|e| e.to_string())?;
-        Ok(Self { ctx, session, picked: Default::default(), readbacks: Vec::new(), test, test_started: false })
+        Ok(Self {
+            ctx,
+            session,
+            picked: Default::default(),
+            readbacks: Vec::new(),
+            test,
+            test_started: false,
+            reported_scene: None,
+        })
     }
 
     /// Scene files dropped on the page or picked: read as text, then
@@ -182,7 +193,13 @@ impl eframe::App for WebViewer {
         }
         self.finish_readbacks();
         self.drive_test();
-        page::report_state(&self.session);
+        let scene = &self.session.settings.scene;
+        if self.reported_scene.as_ref().is_none_or(|(s, _)| s != scene) {
+            self.reported_scene = Some((scene.clone(), scene.to_toml()));
+        }
+        if let Some((_, toml)) = &self.reported_scene {
+            page::report_state(&self.session, toml);
+        }
         if self.session.wants_frames() || !self.readbacks.is_empty() {
             ui.ctx().request_repaint();
         }

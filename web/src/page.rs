@@ -102,8 +102,9 @@ fn set(object: &Object, key: &str, value: impl Into<JsValue>) {
     let _ = Reflect::set(object, &JsValue::from_str(key), &value.into());
 }
 
-/// What the page shows, every frame, as `window.ptState`.
-pub fn report_state(session: &Session) {
+/// What the page shows, every frame, as `window.ptState`; `scene` is the
+/// scene as TOML, which the caller keeps until the scene changes.
+pub fn report_state(session: &Session, scene: &str) {
     let Ok(window) = window() else { return };
     let state = Object::new();
     let (w, h) = session.image_size();
@@ -113,7 +114,7 @@ pub fn report_state(session: &Session) {
     set(&state, "tracing", session.stats.tracing);
     set(&state, "idle", session.idle());
     set(&state, "status", session.files.status.as_str());
-    set(&state, "scene", session.scene_toml());
+    set(&state, "scene", scene);
     set(&state, "panelWidth", session.image_rect().min.x);
     set(&state, "adapter", session.stats.adapter.as_str());
     set(&state, "nonFinite", session.stats.non_finite as f64);

@@ -227,10 +227,7 @@ impl Viewer {
     fn handle_actions(&mut self, a: &Actions) -> Result<()> {
         let Some(paths) = self.session.files.paths.clone() else { return Ok(()) };
         if a.load_scene {
-            match Scene::load(Path::new(&paths.scene)) {
-                Ok(scene) => self.session.set_scene(scene, &paths.scene),
-                Err(e) => self.session.files.status = format!("error: {}", pt_viewer::error_chain(&e)),
-            }
+            self.session.load_scene(&paths.scene, Scene::load(Path::new(&paths.scene)));
         }
         if a.save_scene {
             self.session.files.status = match std::fs::write(&paths.scene, self.session.scene_toml()) {

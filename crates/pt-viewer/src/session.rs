@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use egui::{Event, Key, MouseWheelUnit, Sense};
 use pt_render::gpu::{Blit, GpuTimer, PendingRead};
 use pt_render::scene::CameraDesc;
-use pt_render::{GpuContext, GpuError, GpuRenderer, Scene};
+use pt_render::{GpuContext, GpuError, GpuRenderer, Scene, SceneError};
 
 use crate::Instant;
 use crate::camera_control::{FLY_SPEED, ORBIT_RADIANS_PER_PIXEL, fly, orbit, zoom};
@@ -398,22 +398,17 @@ impl Session {
         Ok(())
     }
 
-    /// Replaces the scene (the shell read a file): the camera becomes the
-    /// one "reset view" returns to.
-    pub fn set_scene(&mut self, scene: Scene, name: &str) {
-        self.initial_camera = scene.camera;
-        self.settings.max_bounces = scene.render.max_bounces;
-        self.settings.scene = scene;
-        self.files.status = format!("loaded {name}");
-    }
-
-    /// Reads a scene file's text: the new scene on success; on failure the
-    /// error, worded as the command line words it, in the status line, and
-    /// the current scene stays.
-    pub fn load_scene_text(&mut self, name: &str, text: &str) -> bool {
-        match Scene::from_toml(text, Path::new(name)) {
+    /// A scene file the shell read (or failed to read): on success the new
+    /// scene, whose camera becomes the one "reset view" returns to; on
+    /// failure the error, worded as the command line words it, in the
+    /// status line, and the current scene stays. Returns whether it loaded.
+    pub fn load_scene(&mut self, name: &str, scene: Result<Scene, SceneError>) -> bool {
+        match scene {
             Ok(scene) => {
-                self.set_scene(scene, name);
+                self.initial_camera = scene.camera;
+                self.settings.max_bounces = scene.render.max_bounces;
+                self.settings.scene = scene;
+                self.files.status = format!("loaded {name}");
                 true
             }
             Err(e) => {
@@ -421,6 +416,12 @@ impl Session {
                 false
             }
         }
+    }
+
+    /// [`Session::load_scene`] of a scene file's text (a browser's pick or
+    /// drop).
+    pub fn load_scene_text(&mut self, name: &str, text: &str) -> bool {
+        self.load_scene(name, Scene::from_toml(text, Path::new(name)))
     }
 
     /// The scene as a file, with the panel's bounce settings.
