@@ -2,15 +2,33 @@
 # Regenerates docs/PERFORMANCE.md and its figures on this machine, with the
 # Mitsuba 3 comparison (outside CI: needs `pip install mitsuba numpy` and
 # Debian's libllvm19).
+#
+#   scripts/performance_report.sh          the default scene, then the suite
+#   scripts/performance_report.sh suite    the scene suite only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p pathtracer
 bin=target/release/pathtracer
 out=docs/bench
 mkdir -p "$out"
-# 1. The reference (our CPU renderer, 100x the largest budget).
-"$bin" bench convergence --reference-only --out-dir "$out"
-# 2. Mitsuba's error against time against that reference.
-python3 scripts/mitsuba/compare.py scenes/default.toml "$out/reference.exr" "$out/mitsuba.csv" --seeds 5
-# 3. Throughput and convergence side by side, and the report.
-"$bin" bench all --seeds 5 --reference "$out/reference.exr" --mitsuba-csv "$out/mitsuba.csv" --out-dir "$out" --report docs/PERFORMANCE.md
+
+if [ "${1:-all}" != suite ]; then
+    # 1. The reference (our CPU renderer, 100x the largest budget).
+    "$bin" bench convergence --reference-only --out-dir "$out"
+    # 2. Mitsuba's error against time against that reference (its fastest sampler).
+    python3 scripts/mitsuba/compare.py scenes/default.toml "$out/reference.exr" "$out/mitsuba.csv" --seeds 5
+    # 3. Throughput and convergence side by side, and the report.
+    "$bin" bench all --seeds 5 --reference "$out/reference.exr" --mitsuba-csv "$out/mitsuba.csv" --out-dir "$out" --report docs/PERFORMANCE.md
+fi
+
+# The scene suite (scenes/): references rendered once and cached by scene
+# hash under docs/bench/references, Mitsuba's four samplers, then ours.
+suite=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out")
+"$bin" bench convergence "${suite[@]}" --reference-only
+python3 scripts/mitsuba/compare.py --suite "$out/suite.tsv" "$out/mitsuba-suite" --seeds 5
+# Mitsuba agrees with each reference: a paired t test per 16x16 region.
+tail -n +2 "$out/suite.tsv" | while IFS=$'\t' read -r name _file reference _rest; do
+    echo "$name: Mitsuba against our reference"
+    "$bin" compare "$out/mitsuba-suite/$name.exr" --reference "$reference" --max-t 5 | tail -n 1
+done
+"$bin" bench convergence "${suite[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md

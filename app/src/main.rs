@@ -95,9 +95,24 @@ struct BenchArgs {
     /// A `time_s,rel_mse` CSV from scripts/mitsuba/compare.py to include.
     #[arg(long)]
     mitsuba_csv: Option<PathBuf>,
-    /// Only render the reference (to OUT_DIR/reference.exr) and stop.
+    /// Only render the reference (to OUT_DIR/reference.exr) and stop; with
+    /// --suite, every scene's cached reference and OUT_DIR/suite.tsv.
     #[arg(long)]
     reference_only: bool,
+    /// Convergence on every scene of --suite-dir: each strategy's time to
+    /// relMSE 1e-3 and the default's gap to the fastest.
+    #[arg(long)]
+    suite: bool,
+    /// The suite's scenes (every *.toml, each with a `# stresses:` line).
+    #[arg(long, default_value = "scenes", requires = "suite")]
+    suite_dir: PathBuf,
+    /// Samples per pixel of each suite reference (cached under
+    /// OUT_DIR/references by a hash of the scene and settings).
+    #[arg(long, default_value_t = 16384, requires = "suite", value_parser = clap::value_parser!(u32).range(2..))]
+    reference_spp: u32,
+    /// Folder of `<scene>.csv` files from `compare.py --suite` to include.
+    #[arg(long, requires = "suite")]
+    mitsuba_dir: Option<PathBuf>,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]

@@ -59,7 +59,7 @@ def wall_transform(corner, eu, ev):
     return T(m)
 
 
-def scene_dict(scene, width, height, max_bounces, spp, seed):
+def scene_dict(scene, width, height, max_bounces, spp, seed, sampler="independent"):
     cam = scene["camera"]
     d = {
         "type": "scene",
@@ -76,7 +76,7 @@ def scene_dict(scene, width, height, max_bounces, spp, seed):
                 "rfilter": {"type": "box"},
                 "pixel_format": "rgb",
             },
-            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+            "sampler": {"type": sampler, "sample_count": spp, "seed": seed},
         },
     }
     bg = scene.get("background", [0, 0, 0])

@@ -33,7 +33,7 @@ pub struct Point {
     pub rmse: f64,
 }
 
-fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
+pub(crate) fn means(accum: &[AccumPixel]) -> Vec<[f32; 3]> {
     accum.iter().map(|p| p.mean().to_array()).collect()
 }
 
@@ -60,12 +60,27 @@ pub fn reference(
 /// Seed of the reference render: distinct from every test seed.
 const REFERENCE_SEED: u32 = 0x5eed_0001;
 
+/// When a curve may stop before its largest sample count.
+#[derive(Copy, Clone, Debug)]
+pub struct Until {
+    /// Stop after the first measurement below this relMSE.
+    pub target: Option<f64>,
+    /// Stop after the first measurement past this many seconds.
+    pub time_limit: f64,
+}
+
+impl Until {
+    /// Run to the largest sample count.
+    pub const END: Self = Self { target: None, time_limit: f64::INFINITY };
+}
+
 /// Renders `strategy` progressively on one backend up to `max_spp`,
-/// measuring the error at every power-of-two sample count from 4 on.
-/// Time is wall clock around synchronised frames; readback and metric
-/// evaluation are outside it.
+/// measuring the error at every power-of-two sample count from 4 on, and
+/// stopping early as `until` says. The default strategy takes the scene's
+/// own flags ([`Scene::default_flags`]). Time is wall clock around
+/// synchronised frames; readback and metric evaluation are outside it.
 #[allow(clippy::too_many_arguments)]
-fn curve(
+pub(crate) fn curve(
     device: Device<'_>,
     scene: &Scene,
     settings: &RenderSettings,
@@ -74,9 +89,10 @@ fn curve(
     max_spp: u32,
     reference: &[[f32; 3]],
     backend: &BenchBackend,
+    until: Until,
 ) -> Result<Vec<Point>> {
     let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
-    params.flags = strategy.flags;
+    params.flags = strategy.flags_for(scene);
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut r = Renderer::new(device, params, &walls, &spheres)?;
@@ -104,6 +120,10 @@ fn curve(
             rmse: metrics::rmse(&img, reference),
         });
         next *= 2;
+        let last = &points[points.len() - 1];
+        if until.target.is_some_and(|t| last.rel_mse < t) || last.time > until.time_limit {
+            break;
+        }
     }
     Ok(points)
 }
@@ -129,13 +149,23 @@ pub fn convergence(
         // 30% slower (driver and machine warming up), which would have
         // penalised whichever strategy came first.
         progress(&format!("{name}: warm-up"));
-        curve(*device, scene, settings, StrategyId::Default.strategy(), 99, max_spp.min(64), reference, name)?;
+        curve(
+            *device,
+            scene,
+            settings,
+            StrategyId::Default.strategy(),
+            99,
+            max_spp.min(64),
+            reference,
+            name,
+            Until::END,
+        )?;
         // Seeds outer, strategies inner: any drift of the machine's speed
         // during the run is spread over all strategies alike.
         for seed in 0..seeds {
             progress(&format!("{name}: seed {} of {seeds}, all strategies", seed + 1));
             for st in &STRATEGIES {
-                points.extend(curve(*device, scene, settings, st, 100 + seed, max_spp, reference, name)?);
+                points.extend(curve(*device, scene, settings, st, 100 + seed, max_spp, reference, name, Until::END)?);
             }
         }
     }

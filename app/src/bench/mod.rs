@@ -12,13 +12,14 @@
 
 pub mod convergence;
 pub mod report;
+pub mod suite;
 pub mod throughput;
 
 pub use convergence::*;
 pub use report::*;
 pub use throughput::*;
 
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_render::scene::DEFAULT_RR_START;
 
 /// Which backend a measurement ran on.
@@ -86,8 +87,9 @@ pub enum StrategyId {
     NeeMis,
     /// BSDF sampling alone.
     BsdfOnly,
-    /// The cosine lobe alone.
-    CosineOnly,
+    /// The glow lobe switched: the cosine lobe alone where the default mixes
+    /// in the glow lobe, the glow lobe mixed in where the default has none.
+    GlowSwitched,
     /// 16 samples per pixel per frame.
     Spp16,
     /// 4 samples per pixel per frame.
@@ -115,12 +117,20 @@ pub struct Strategy {
     pub id: StrategyId,
     /// Label.
     pub name: &'static str,
-    /// Integrator flags.
-    pub flags: u32,
+    /// Its integrator flags from the scene's default ones.
+    pub flags: fn(u32) -> u32,
     /// Russian roulette start.
     pub rr_start: u32,
     /// Samples per pixel per frame.
     pub spp_per_frame: u32,
+}
+
+impl Strategy {
+    /// Its integrator flags on `scene`: the scene's own default ones
+    /// ([`pt_render::Scene::default_flags`]) with this strategy's change.
+    pub fn flags_for(&self, scene: &pt_render::Scene) -> u32 {
+        (self.flags)(scene.default_flags())
+    }
 }
 
 /// Samples per pixel per frame of `render` and of the default strategy.
@@ -137,84 +147,78 @@ const _: () = assert!(
     "reword the default strategy's name, the report's defaults section and the --sampler and --spp-per-frame help"
 );
 
-/// The strategies compared; the first is the default configuration
-/// (`FLAGS_DEFAULT`, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`), each
-/// other changes one thing.
+/// The strategies compared; the first is the default configuration (the
+/// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
+/// each other changes one thing from it on the same scene.
 pub const STRATEGIES: [Strategy; 11] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE (no MIS), glow lobe, RR from 5, 64 spp/frame",
-        flags: FLAGS_DEFAULT,
+        name: "default: Sobol (first 5 draws), NEE (no MIS), glow lobe unless the light is large, RR from 5, 64 spp/frame",
+        flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::Independent,
         name: "independent samples (PCG)",
-        flags: FLAGS_DEFAULT & !FLAG_SOBOL,
+        flags: |f| f & !FLAG_SOBOL,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::RrFrom3,
         name: "RR from 3, survival = max component",
-        flags: FLAGS_DEFAULT,
+        flags: |f| f,
         rr_start: 3,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::RrFrom3Luminance,
         name: "RR from 3, survival = luminance",
-        flags: FLAGS_DEFAULT | FLAG_RR_LUMINANCE,
+        flags: |f| f | FLAG_RR_LUMINANCE,
         rr_start: 3,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::RrFrom1,
         name: "RR from 1",
-        flags: FLAGS_DEFAULT,
+        flags: |f| f,
         rr_start: 1,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::NeeMis,
         name: "NEE with MIS",
-        flags: FLAGS_DEFAULT | FLAG_MIS,
+        flags: |f| f | FLAG_MIS,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::BsdfOnly,
         name: "BSDF sampling only (no NEE)",
-        flags: FLAGS_DEFAULT & !(FLAG_NEE | FLAG_MIS),
+        flags: |f| f & !(FLAG_NEE | FLAG_MIS),
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
-        id: StrategyId::CosineOnly,
-        name: "cosine lobe only (no glow lobe)",
-        flags: FLAGS_DEFAULT & !FLAG_GLOW,
+        id: StrategyId::GlowSwitched,
+        name: "glow lobe switched (off where the default has it, else on)",
+        flags: |f| f ^ FLAG_GLOW,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
         id: StrategyId::Spp16,
         name: "16 spp/frame",
-        flags: FLAGS_DEFAULT,
+        flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: 16,
     },
-    Strategy {
-        id: StrategyId::Spp4,
-        name: "4 spp/frame",
-        flags: FLAGS_DEFAULT,
-        rr_start: DEFAULT_RR_START,
-        spp_per_frame: 4,
-    },
+    Strategy { id: StrategyId::Spp4, name: "4 spp/frame", flags: |f| f, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
     Strategy {
         id: StrategyId::SobolEverywhere,
         name: "Sobol for every draw",
-        flags: FLAGS_DEFAULT | FLAG_SOBOL_DEEP,
+        flags: |f| f | FLAG_SOBOL_DEEP,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },

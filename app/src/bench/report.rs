@@ -299,7 +299,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
         vs_default(StrategyId::Spp4),
         vs_default(StrategyId::NeeMis),
         vs_default(StrategyId::BsdfOnly),
-        vs_default(StrategyId::CosineOnly),
+        vs_default(StrategyId::GlowSwitched),
     )
 }
 

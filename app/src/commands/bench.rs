@@ -18,6 +18,9 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let gpu = ctx.as_ref();
     let cpu_too = !matches!(args.backend, SuiteBackends::Gpu);
     std::fs::create_dir_all(&args.out_dir).with_context(|| format!("{}: cannot create", args.out_dir.display()))?;
+    if args.suite {
+        return super::suite::run(args, gpu, cpu_too);
+    }
     let mut report = String::new();
     let default_scene = Scene::default_scene();
 
@@ -96,6 +99,10 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         report.push_str(&defaults_section(&points));
         report.push_str(&gpu_machine_section(args.report.as_deref()));
         report.push_str(&web_section(args.report.as_deref()));
+    }
+    // The suite's section comes from its own run: keep it.
+    if let Some(section) = args.report.as_deref().and_then(super::suite::existing_section) {
+        report.push_str(&section);
     }
 
     if let Some(path) = &args.report {

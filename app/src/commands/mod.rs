@@ -6,6 +6,7 @@ pub mod bench;
 pub mod compare;
 pub mod merge;
 pub mod render;
+pub mod suite;
 pub mod view;
 
 use std::path::PathBuf;

@@ -9,6 +9,7 @@ pub mod output;
 pub mod parts;
 pub mod renderer;
 pub mod scene;
+pub mod strategy;
 
 pub use cpu::CpuRenderer;
 pub use gpu::{GpuContext, GpuError, GpuRenderer, KERNEL_SPV};

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use pt_core::geometry::{MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::{DVec3, Vec3};
-use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
+use pt_core::params::TONEMAP_ACES;
 use pt_core::{Camera, FrameParams, Geometry, Sphere, SphereLight, Tile, Wall};
 use serde::Deserialize;
 use toml::Spanned;
@@ -303,10 +303,17 @@ impl Scene {
             wall_count: self.walls.len() as u32,
             sphere_count: self.spheres.len() as u32,
             tonemap: TONEMAP_ACES,
-            flags: FLAGS_DEFAULT,
+            flags: self.default_flags(),
             sample_offset: 0,
             tile: Tile::whole(settings.width, settings.height),
         }
+    }
+
+    /// The integrator flags this scene renders with unless told otherwise
+    /// (`strategy::default_flags`: the project's defaults, adapted to the
+    /// size of the light).
+    pub fn default_flags(&self) -> u32 {
+        crate::strategy::default_flags(self)
     }
 
     /// The scene as TOML that [`Scene::from_toml`] reads back unchanged.

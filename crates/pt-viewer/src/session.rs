@@ -407,6 +407,9 @@ impl Session {
             Ok(scene) => {
                 self.initial_camera = scene.camera;
                 self.settings.max_bounces = scene.render.max_bounces;
+                // The new scene's own default strategy (the panel's switches
+                // show it and can change it again).
+                self.settings.flags = scene.default_flags();
                 self.settings.scene = scene;
                 self.files.status = format!("loaded {name}");
                 true

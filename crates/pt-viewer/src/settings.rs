@@ -2,7 +2,7 @@
 //! change invalidates the accumulated image.
 
 use pt_core::FrameParams;
-use pt_core::params::{FLAGS_DEFAULT, TONEMAP_ACES};
+use pt_core::params::TONEMAP_ACES;
 use pt_render::{RenderSettings, Scene};
 
 /// How many samples each frame traces.
@@ -64,12 +64,12 @@ impl ViewSettings {
     pub fn new(scene: Scene, width: u32, height: u32) -> Self {
         let render = scene.render;
         Self {
+            flags: scene.default_flags(),
             scene,
             width,
             height,
             max_bounces: render.max_bounces,
             rr_start: render.rr_start,
-            flags: FLAGS_DEFAULT,
             samples_per_frame: SamplesPerFrame::Auto { budget_ms: 30.0 },
             target_spp: 0,
             paused: false,

@@ -1,0 +1,128 @@
+//! The sampling strategy a scene renders with by default, chosen from what
+//! the scene is (docs/ARCHITECTURE.md, "Per-scene defaults").
+//!
+//! One feature decides: how large the light looks from the room, measured
+//! as the mean over the room's surfaces of `1 - cos` of the half angle of
+//! the light's cone (its solid angle over 2 pi). The glow lobe
+//! (`pt_core::light::GlowLobe`) sends a quarter of the BSDF samples toward
+//! the light's bright surroundings, which the cosine lobe rarely finds
+//! around a small light; around a large light the cosine lobe finds them as
+//! often, and the glow lobe's samples are spent where light already is.
+//! `pathtracer bench convergence --suite` measured the crossover: see
+//! [`GLOW_MAX_EXTENT`].
+//!
+//! Every choice is one of the unbiased configurations the accuracy suite
+//! checks; only the noise differs.
+
+use pt_core::glam::Vec3;
+use pt_core::light::light_cone;
+use pt_core::params::{FLAG_GLOW, FLAGS_DEFAULT};
+
+use crate::scene::Scene;
+
+/// The largest light extent (mean `1 - cos` of the light's half angle over
+/// the room's surfaces) at which the glow lobe stays on. Measured on the
+/// scene suite at 128x128 (docs/PERFORMANCE.md): at extents up to 0.008
+/// (the default scene, 0.008; the corner light, 0.007; the near-wall light,
+/// 0.005) the glow lobe halves the time to relMSE 1e-3 or more; at 0.028 (a
+/// light of radius 0.25 in the middle of the room) it no longer helps, and
+/// at 0.093 (radius 0.5) it costs about 10%.
+pub const GLOW_MAX_EXTENT: f32 = 0.015;
+
+/// Sample points per wall edge and per sphere for [`light_extent`].
+const GRID: u32 = 16;
+
+/// How large the light looks from the room: the mean over the walls' and
+/// spheres' surfaces (sampled on fixed grids of equal weight per point) of
+/// `1 - cos` of the light's half angle, 1 where a point is on or inside the
+/// light. 0 for a scene with no surfaces.
+pub fn light_extent(scene: &Scene) -> f32 {
+    let light = scene.light;
+    let extent = |p: Vec3| {
+        let cone = light_cone(&light, p);
+        if cone.is_empty() { 1.0 } else { cone.one_minus_cos_max as f64 }
+    };
+    let (mut sum, mut n) = (0.0f64, 0u32);
+    let cell = |i: u32| (i as f32 + 0.5) / GRID as f32;
+    for w in &scene.walls {
+        let w = &w.wall;
+        for i in 0..GRID {
+            for j in 0..GRID {
+                sum += extent(w.corner + cell(i) * w.edge_u + cell(j) * w.edge_v);
+                n += 1;
+            }
+        }
+    }
+    for s in &scene.spheres {
+        let s = &s.sphere;
+        // Points equally spaced in z and in azimuth: equal areas.
+        for i in 0..GRID {
+            let z = 2.0 * cell(i) - 1.0;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            for j in 0..GRID {
+                let phi = std::f32::consts::TAU * cell(j);
+                sum += extent(s.center + s.radius * Vec3::new(r * phi.cos(), r * phi.sin(), z));
+                n += 1;
+            }
+        }
+    }
+    if n == 0 { 0.0 } else { (sum / n as f64) as f32 }
+}
+
+/// The integrator flags `scene` renders with unless told otherwise: the
+/// project's defaults (`FLAGS_DEFAULT`), without the glow lobe when the
+/// light looks large from the room ([`GLOW_MAX_EXTENT`]).
+pub fn default_flags(scene: &Scene) -> u32 {
+    if light_extent(scene) > GLOW_MAX_EXTENT { FLAGS_DEFAULT & !FLAG_GLOW } else { FLAGS_DEFAULT }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn with_light(radius: f32, center: Vec3) -> Scene {
+        let mut s = Scene::default_scene();
+        s.light.radius = radius;
+        s.light.center = center;
+        s
+    }
+
+    #[test]
+    fn the_extent_of_a_light_seen_from_one_wall_point_is_its_cones() {
+        // Over a 2x2 wall 1 unit below a light of radius 0.1 at its centre,
+        // the mean lies between the cone at the centre (the largest, d^2 =
+        // 1) and at a corner (the smallest, d^2 = 3).
+        let text = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov_degrees = 40.0\n\
+                    [light]\ncenter = [0.0, 1.0, 0.0]\nradius = 0.1\nradiance = [1.0, 1.0, 1.0]\n\
+                    [[walls]]\ncorner = [-1.0, 0.0, 1.0]\nedge_u = [2.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, -2.0]\n\
+                    albedo = [0.5, 0.5, 0.5]\n";
+        let scene = Scene::from_toml(text, Path::new("t.toml")).unwrap();
+        let e = light_extent(&scene);
+        let at = |d2: f32| {
+            let s2 = 0.01 / d2;
+            s2 / (1.0 + (1.0 - s2).sqrt())
+        };
+        assert!(e < at(1.0) && e > at(3.0), "{e}");
+        // Without surfaces there is nothing to light: 0.
+        let bare = Scene { walls: Vec::new(), spheres: Vec::new(), ..scene };
+        assert_eq!(light_extent(&bare), 0.0);
+    }
+
+    #[test]
+    fn the_glow_lobe_stays_for_small_lights_and_goes_for_large_ones() {
+        let default = Scene::default_scene();
+        assert!(light_extent(&default) < GLOW_MAX_EXTENT);
+        assert_eq!(default_flags(&default), FLAGS_DEFAULT);
+        let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
+        assert!(light_extent(&large) > 5.0 * GLOW_MAX_EXTENT);
+        assert_eq!(default_flags(&large), FLAGS_DEFAULT & !FLAG_GLOW);
+        // The extent grows with the light's radius at a fixed centre.
+        let radii = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45];
+        let e: Vec<f32> = radii.iter().map(|&r| light_extent(&with_light(r, Vec3::new(0.0, 1.0, 0.0)))).collect();
+        assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
+        // And it is the frame parameters' default too.
+        let st = large.render;
+        assert_eq!(large.frame_params(&st, 1, 0).flags, FLAGS_DEFAULT & !FLAG_GLOW);
+    }
+}
