@@ -189,13 +189,21 @@ pub fn read_curve(path: &PathBuf) -> Result<Vec<(f64, f64)>> {
 
 const MITSUBA_FAIRNESS: &str = "## Against Mitsuba 3\n\n\
 Made by `scripts/performance_report.sh`: `scripts/mitsuba/compare.py` renders the same scene \
-file with Mitsuba 3 (`llvm_ad_rgb`, `path` integrator, `max_depth` = max bounces + 1, \
-independent sampler, box pixel filter, the light a black-BSDF sphere with an area emitter, \
-walls two-sided diffuse) on the same machine, at the same resolution, against the same \
-reference. Mitsuba's kernels are compiled before timing (each sample count is rendered once \
-untimed, then timed); each of its points is one render from scratch at that sample count, \
-with the median time and mean relMSE of its seeds, as ours. Our points are the progressive renders above (default strategy). Times to \
-relMSE 1e-3 are interpolated log-log.\n\n";
+file with Mitsuba 3 (`llvm_ad_rgb`, `path` integrator, `max_depth` = max bounces + 1, box pixel \
+filter, the light a black-BSDF sphere with an area emitter, walls two-sided diffuse) on the same \
+machine, at the same resolution, against the same reference, with each of its `independent`, \
+`multijitter`, `ldsampler` and `orthogonal` samplers, and keeps the one that reaches relMSE 1e-3 \
+soonest (named below). Mitsuba's kernels are compiled before timing (each sample count is \
+rendered once untimed, then timed); each of its points is one render from scratch at that sample \
+count, with the median time and mean relMSE of its seeds, as ours. Our points are the progressive \
+renders above (default strategy). Times to relMSE 1e-3 are interpolated log-log.\n\n";
+
+/// The sampler named in the header of a curve from `compare.py` (its
+/// fourth column), if any.
+pub fn curve_sampler(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    text.lines().next()?.split(',').nth(3).map(|s| s.trim().to_string()).filter(|s| !s.is_empty())
+}
 
 /// The defaults and the measurements behind each: how much longer (or
 /// shorter) each alternative took to relMSE 1e-3 than the default, per
@@ -357,7 +365,8 @@ pub(crate) fn mitsuba_section(csv: &PathBuf, points: &[Point]) -> Result<String>
     let mut s =
         String::from(MITSUBA_FAIRNESS) + "| renderer | time to relMSE 1e-3 | ratio to Mitsuba |\n|---|---|---|\n";
     s.push_str(&format!(
-        "| Mitsuba 3 llvm_ad_rgb, path (`{}`) | {} | 1 |\n",
+        "| Mitsuba 3 llvm_ad_rgb, path, {} sampler (`{}`) | {} | 1 |\n",
+        curve_sampler(csv).unwrap_or_else(|| "independent".into()),
         csv.display(),
         tm.map_or("not reached".into(), |t| format!("{t:.3} s"))
     ));

@@ -67,7 +67,8 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         bench::write_csv(&csv, &points)?;
         let mut extra = Vec::new();
         if let Some(m) = &args.mitsuba_csv {
-            extra.push(("Mitsuba 3 llvm_ad_rgb, path".to_string(), bench::read_curve(m)?));
+            let sampler = bench::curve_sampler(m).unwrap_or_else(|| "independent".into());
+            extra.push((format!("Mitsuba 3 llvm_ad_rgb, path, {sampler}"), bench::read_curve(m)?));
         }
         let png = args.out_dir.join("convergence.png");
         bench::plot(&png, &points, &extra)?;

@@ -1,22 +1,29 @@
 //! The sampling strategy a scene renders with by default, chosen from what
 //! the scene is (docs/ARCHITECTURE.md, "Per-scene defaults").
 //!
-//! One feature decides: how large the light looks from the room, measured
-//! as the mean over the room's surfaces of `1 - cos` of the half angle of
-//! the light's cone (its solid angle over 2 pi). The glow lobe
-//! (`pt_core::light::GlowLobe`) sends a quarter of the BSDF samples toward
-//! the light's bright surroundings, which the cosine lobe rarely finds
-//! around a small light; around a large light the cosine lobe finds them as
-//! often, and the glow lobe's samples are spent where light already is.
-//! `pathtracer bench convergence --suite` measured the crossover: see
-//! [`GLOW_MAX_EXTENT`].
+//! Two features decide:
+//! - how large the light looks from the room: the mean over the room's
+//!   surfaces of `1 - cos` of the half angle of the light's cone (its solid
+//!   angle over 2 pi), [`light_extent`];
+//! - how bright the room is: the area-weighted mean albedo of its surfaces,
+//!   [`mean_albedo`].
+//!
+//! The glow lobe (`pt_core::light::GlowLobe`) sends a quarter of the BSDF
+//! samples toward the light's bright surroundings, which the cosine lobe
+//! rarely finds around a small light in a room of middling albedo. Around
+//! a large light the cosine lobe finds them as often; in a bright room the
+//! light that many bounces spread over every wall outweighs them. Either
+//! way the glow lobe's samples are spent where they are not needed. Around
+//! a large light, BSDF rays also hit the light often, and MIS lets them
+//! count. `pathtracer bench convergence --suite` measured the thresholds:
+//! see [`GLOW_MAX_EXTENT`] and [`GLOW_MAX_ALBEDO`].
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.
 
 use pt_core::glam::Vec3;
 use pt_core::light::light_cone;
-use pt_core::params::{FLAG_GLOW, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAGS_DEFAULT};
 
 use crate::scene::Scene;
 
@@ -28,6 +35,16 @@ use crate::scene::Scene;
 /// light of radius 0.25 in the middle of the room) it no longer helps, and
 /// at 0.093 (radius 0.5) it costs about 10%.
 pub const GLOW_MAX_EXTENT: f32 = 0.015;
+
+/// The largest mean albedo of the room at which the glow lobe stays on.
+/// Measured on the scene suite at 128x128: in the default scene (mean
+/// albedo 0.55) the glow lobe halves the time to relMSE 1e-3; in the same
+/// room with every albedo 0.9 and 16 bounces (mean 0.89) the cosine lobe
+/// alone takes three quarters of its time. The suite has no room in
+/// between: the threshold sits where the share of light that has bounced
+/// more than once, about `a / (1 - a)` of the once-bounced for albedo `a`,
+/// is halfway (geometrically) between the two, 3.
+pub const GLOW_MAX_ALBEDO: f32 = 0.75;
 
 /// Sample points per wall edge and per sphere for [`light_extent`].
 const GRID: u32 = 16;
@@ -69,11 +86,30 @@ pub fn light_extent(scene: &Scene) -> f32 {
     if n == 0 { 0.0 } else { (sum / n as f64) as f32 }
 }
 
+/// The area-weighted mean albedo (mean of the three channels) of the
+/// walls and spheres; 0 for a scene with no surfaces.
+pub fn mean_albedo(scene: &Scene) -> f32 {
+    let mean = |a: Vec3| (a.x + a.y + a.z) / 3.0;
+    let walls = scene.walls.iter().map(|w| (w.wall.edge_u.cross(w.wall.edge_v).length(), mean(w.wall.albedo)));
+    let spheres =
+        scene.spheres.iter().map(|s| (4.0 * std::f32::consts::PI * s.sphere.radius.powi(2), mean(s.sphere.albedo)));
+    let (area, weighted) =
+        walls.chain(spheres).fold((0.0f64, 0.0f64), |(a, w), (da, al)| (a + da as f64, w + (da * al) as f64));
+    if area > 0.0 { (weighted / area) as f32 } else { 0.0 }
+}
+
 /// The integrator flags `scene` renders with unless told otherwise: the
-/// project's defaults (`FLAGS_DEFAULT`), without the glow lobe when the
-/// light looks large from the room ([`GLOW_MAX_EXTENT`]).
+/// project's defaults (`FLAGS_DEFAULT`); when the light looks large from
+/// the room ([`GLOW_MAX_EXTENT`]) without the glow lobe and with MIS; in a
+/// bright room ([`GLOW_MAX_ALBEDO`]) without the glow lobe.
 pub fn default_flags(scene: &Scene) -> u32 {
-    if light_extent(scene) > GLOW_MAX_EXTENT { FLAGS_DEFAULT & !FLAG_GLOW } else { FLAGS_DEFAULT }
+    if light_extent(scene) > GLOW_MAX_EXTENT {
+        (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
+    } else if mean_albedo(scene) > GLOW_MAX_ALBEDO {
+        FLAGS_DEFAULT & !FLAG_GLOW
+    } else {
+        FLAGS_DEFAULT
+    }
 }
 
 #[cfg(test)]
@@ -116,13 +152,44 @@ mod tests {
         assert_eq!(default_flags(&default), FLAGS_DEFAULT);
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
         assert!(light_extent(&large) > 5.0 * GLOW_MAX_EXTENT);
-        assert_eq!(default_flags(&large), FLAGS_DEFAULT & !FLAG_GLOW);
+        assert_eq!(default_flags(&large), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
         // The extent grows with the light's radius at a fixed centre.
         let radii = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45];
         let e: Vec<f32> = radii.iter().map(|&r| light_extent(&with_light(r, Vec3::new(0.0, 1.0, 0.0)))).collect();
         assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
         // And it is the frame parameters' default too.
         let st = large.render;
-        assert_eq!(large.frame_params(&st, 1, 0).flags, FLAGS_DEFAULT & !FLAG_GLOW);
+        assert_eq!(large.frame_params(&st, 1, 0).flags, (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
+    }
+
+    #[test]
+    fn a_bright_room_drops_the_glow_lobe_but_keeps_nee_alone() {
+        let default = Scene::default_scene();
+        let a = mean_albedo(&default);
+        assert!(a > 0.5 && a < 0.6, "{a}");
+        let mut bright = default.clone();
+        for w in &mut bright.walls {
+            w.wall.albedo = Vec3::splat(0.9);
+        }
+        for s in &mut bright.spheres {
+            s.sphere.albedo = Vec3::splat(0.9);
+        }
+        assert!((mean_albedo(&bright) - 0.9).abs() < 1e-6);
+        assert_eq!(default_flags(&bright), FLAGS_DEFAULT & !FLAG_GLOW);
+        // Area weights: one 2x2 wall of albedo 1 and one of 0 average 1/2,
+        // a sphere of radius 1 (area 4 pi) against a 2x2 wall (area 4)
+        // weighs pi times as much.
+        let mut two = default.clone();
+        two.spheres.clear();
+        two.walls.truncate(2);
+        two.walls[0].wall.albedo = Vec3::ONE;
+        two.walls[1].wall.albedo = Vec3::ZERO;
+        assert!((mean_albedo(&two) - 0.5).abs() < 1e-6);
+        two.walls.truncate(1);
+        two.spheres = default.spheres[..1].to_vec();
+        two.spheres[0].sphere.radius = 1.0;
+        two.spheres[0].sphere.albedo = Vec3::ZERO;
+        let pi = std::f32::consts::PI;
+        assert!((mean_albedo(&two) - 1.0 / (1.0 + pi)).abs() < 1e-6);
     }
 }
