@@ -249,7 +249,7 @@ fn seeds(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<u32> {
 
 /// Each seed's time to relMSE `target` along its own curve, with the seed
 /// (seeds that do not reach it are left out).
-fn times_by_seed(points: &[Point], backend: &BenchBackend, strategy: &str, target: f64) -> Vec<(u32, f64)> {
+pub(crate) fn times_by_seed(points: &[Point], backend: &BenchBackend, strategy: &str, target: f64) -> Vec<(u32, f64)> {
     seeds(points, backend, strategy)
         .iter()
         .filter_map(|&seed| {

@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use pt_render::gpu::GpuContext;
 use pt_render::{CpuRenderer, Device, RenderSettings, Scene, metrics, output};
 
-use super::convergence::{Point, Until, curve, means, time_to};
+use super::convergence::{Point, Until, curve, means, time_to, times_by_seed};
 use super::{BenchBackend, STRATEGIES, StrategyId, median_min_max};
 
 /// One scene of the suite.
@@ -217,23 +217,6 @@ pub fn without_reference_noise(points: &mut [Point], noise: f64) {
 /// A time to the target per seed, by seed.
 type SeedTimes = Vec<(u32, f64)>;
 
-/// Each seed's time to `target` of `strategy` on `backend`.
-fn seed_times(points: &[Point], backend: &BenchBackend, strategy: &str, target: f64) -> SeedTimes {
-    let mut seeds: Vec<u32> =
-        points.iter().filter(|p| p.backend == *backend && p.strategy == strategy).map(|p| p.seed).collect();
-    seeds.sort_unstable();
-    seeds.dedup();
-    seeds
-        .into_iter()
-        .filter_map(|seed| {
-            let mut c: Vec<&Point> =
-                points.iter().filter(|p| p.backend == *backend && p.strategy == strategy && p.seed == seed).collect();
-            c.sort_by_key(|p| p.spp);
-            time_to(&c.iter().map(|p| (p.time, p.rel_mse)).collect::<Vec<_>>(), target).map(|t| (seed, t))
-        })
-        .collect()
-}
-
 /// Median of the seeds' times, `None` unless every seed reached the target.
 fn median_time(times: &SeedTimes, seeds: usize) -> Option<f64> {
     (times.len() == seeds && seeds > 0).then(|| median_min_max(times.iter().map(|t| t.1).collect()).0)
@@ -267,7 +250,7 @@ pub fn scene_result(points: &[Point], backend: &BenchBackend, seeds: u32, target
     let standings: Vec<Standing> = STRATEGIES
         .iter()
         .map(|st| {
-            let times = seed_times(points, backend, st.name, target);
+            let times = times_by_seed(points, backend, st.name, target);
             Standing { median: median_time(&times, seeds as usize), times }
         })
         .collect();
