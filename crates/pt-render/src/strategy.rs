@@ -13,9 +13,9 @@
 //! rarely finds around a small light in a room of middling albedo. Around
 //! a large light the cosine lobe finds them as often; in a bright room the
 //! light that many bounces spread over every wall outweighs them. Either
-//! way the glow lobe's samples are spent where they are not needed. Around
-//! a large light, BSDF rays also hit the light often, and MIS lets them
-//! count. `pathtracer bench convergence --suite` measured the thresholds:
+//! way the glow lobe's samples are spent where they are not needed, and
+//! MIS lets the BSDF rays that hit the light count: often around a large
+//! light, and along the long paths of a bright room. `pathtracer bench convergence --suite` measured the thresholds:
 //! see [`GLOW_MAX_EXTENT`] and [`GLOW_MAX_ALBEDO`].
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
@@ -100,13 +100,13 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 
 /// The integrator flags `scene` renders with unless told otherwise: the
 /// project's defaults (`FLAGS_DEFAULT`); when the light looks large from
-/// the room ([`GLOW_MAX_EXTENT`]) without the glow lobe and with MIS; in a
-/// bright room ([`GLOW_MAX_ALBEDO`]) without the glow lobe.
+/// the room ([`GLOW_MAX_EXTENT`]) or the room is bright
+/// ([`GLOW_MAX_ALBEDO`]), without the glow lobe and with MIS.
 pub fn default_flags(scene: &Scene) -> u32 {
     if light_extent(scene) > GLOW_MAX_EXTENT {
         (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
     } else if mean_albedo(scene) > GLOW_MAX_ALBEDO {
-        FLAGS_DEFAULT & !FLAG_GLOW
+        (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
     } else {
         FLAGS_DEFAULT
     }
@@ -163,7 +163,7 @@ mod tests {
     }
 
     #[test]
-    fn a_bright_room_drops_the_glow_lobe_but_keeps_nee_alone() {
+    fn a_bright_room_drops_the_glow_lobe_for_mis() {
         let default = Scene::default_scene();
         let a = mean_albedo(&default);
         assert!(a > 0.5 && a < 0.6, "{a}");
@@ -175,7 +175,7 @@ mod tests {
             s.sphere.albedo = Vec3::splat(0.9);
         }
         assert!((mean_albedo(&bright) - 0.9).abs() < 1e-6);
-        assert_eq!(default_flags(&bright), FLAGS_DEFAULT & !FLAG_GLOW);
+        assert_eq!(default_flags(&bright), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
         // Area weights: one 2x2 wall of albedo 1 and one of 0 average 1/2,
         // a sphere of radius 1 (area 4 pi) against a 2x2 wall (area 4)
         // weighs pi times as much.
