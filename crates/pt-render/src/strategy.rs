@@ -103,9 +103,7 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// the room ([`GLOW_MAX_EXTENT`]) or the room is bright
 /// ([`GLOW_MAX_ALBEDO`]), without the glow lobe and with MIS.
 pub fn default_flags(scene: &Scene) -> u32 {
-    if light_extent(scene) > GLOW_MAX_EXTENT {
-        (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
-    } else if mean_albedo(scene) > GLOW_MAX_ALBEDO {
+    if light_extent(scene) > GLOW_MAX_EXTENT || mean_albedo(scene) > GLOW_MAX_ALBEDO {
         (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
     } else {
         FLAGS_DEFAULT
