@@ -186,7 +186,7 @@ fn every_kernel_binding_is_the_one_the_host_names() {
         .collect();
     let block = |size: usize| format!("struct of {size} bytes");
     let expected = [
-        (PARAMS, true, block(size_of::<FrameParams>())),
+        (PARAMS, false, block(size_of::<FrameParams>())),
         (GEOMETRY, true, block(size_of::<Geometry>())),
         (ACCUM, false, format!("[{}]", block(size_of::<AccumPixel>()))),
         (DISPLAY, false, "[u32]".to_string()),

@@ -4,7 +4,8 @@
 //! Bindings (descriptor set 0); the host names them in
 //! `pt-render/src/gpu/bindings.rs`, and its layout test checks these
 //! numbers against those names:
-//! 0 `FrameParams` (uniform), 1 `Geometry` (uniform: walls and spheres),
+//! 0 `FrameParams` (read-only storage), 1 `Geometry` (uniform: walls and
+//! spheres),
 //! 2 accumulation buffer, 3 display buffer (RGBA8 packed in u32),
 //! 4 non-finite sample counter.
 #![cfg_attr(target_arch = "spirv", no_std)]
@@ -53,8 +54,8 @@ fn accumulate_pixel(
 
 /// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
 /// `S` spheres, with the parameters copied into the invocation's own memory
-/// too: lavapipe would otherwise gather each of them from the uniform block
-/// at every read.
+/// too: lavapipe would otherwise gather each of them from the buffer at
+/// every read.
 fn small<const W: u32, const S: u32>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
     let params = *params;
     integrator::render_pixel_small::<W, S>(x, y, &params, geometry)
@@ -69,7 +70,7 @@ macro_rules! accumulate_entry {
         #[spirv(compute(threads($x, $y)))]
         pub fn $name(
             #[spirv(global_invocation_id)] id: UVec3,
-            #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] params: &FrameParams,
             #[spirv(uniform, descriptor_set = 0, binding = 1)] geometry: &Geometry,
             #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
@@ -98,7 +99,7 @@ accumulate_entry!(accumulate_small_8w_4s, 8, 8, small::<8, 4>);
 #[spirv(compute(threads(8, 8)))]
 pub fn display(
     #[spirv(global_invocation_id)] id: UVec3,
-    #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] params: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &[AccumPixel],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] out: &mut [u32],
 ) {
@@ -123,7 +124,7 @@ pub fn blit_vs(#[spirv(vertex_index)] index: i32, #[spirv(position)] position: &
 #[spirv(fragment)]
 pub fn blit_fs(
     uv: Vec2,
-    #[spirv(uniform, descriptor_set = 0, binding = 0)] params: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] params: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] display: &[u32],
     color: &mut Vec4,
 ) {

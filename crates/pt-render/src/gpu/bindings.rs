@@ -5,7 +5,14 @@
 
 use pt_core::FrameParams;
 
-/// `FrameParams` (uniform): size, camera, light, settings of the frame.
+/// `FrameParams` (read-only storage): size, camera, light, settings of the
+/// frame. Not a uniform block: lavapipe (Mesa 22.3) looks for uniform-block
+/// values that steer a large shader's branches and loops
+/// (`lvp_find_inlinable_uniforms`), and then, on every dispatch after the
+/// block was written, clones the shader, folds the values in and
+/// re-optimises it (`update_inline_shader_state`) before it looks for a
+/// compiled variant: 12 to 19 ms per dispatch of this kernel on 2 cores,
+/// whatever the image size. A storage buffer is never inlined.
 pub const PARAMS: u32 = 0;
 /// `Geometry` (uniform): the walls and spheres.
 pub const GEOMETRY: u32 = 1;
@@ -29,6 +36,20 @@ pub(super) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLay
     }
 }
 
+/// `FrameParams` at [`PARAMS`], read-only, for `visibility`.
+pub(super) fn params_entry(visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding: PARAMS,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
+        },
+        count: None,
+    }
+}
+
 /// A uniform block of type `T` at `binding`, for the compute stage.
 pub(super) fn uniform_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -43,13 +64,13 @@ pub(super) fn uniform_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// A layout of the uniform `FrameParams` at [`PARAMS`] plus `others`.
+/// A layout of `FrameParams` at [`PARAMS`] plus `others`.
 pub(super) fn bind_group_layout(
     device: &wgpu::Device,
     label: &str,
     others: &[wgpu::BindGroupLayoutEntry],
 ) -> wgpu::BindGroupLayout {
-    let mut entries = vec![uniform_entry::<FrameParams>(PARAMS)];
+    let mut entries = vec![params_entry(wgpu::ShaderStages::COMPUTE)];
     entries.extend_from_slice(others);
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
 }

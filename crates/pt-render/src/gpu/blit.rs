@@ -1,8 +1,6 @@
 //! The viewer's draw of the display buffer onto its render target.
 
-use pt_core::FrameParams;
-
-use super::bindings::{DISPLAY, PARAMS, bind_group};
+use super::bindings::{DISPLAY, PARAMS, bind_group, params_entry};
 use super::kernel::kernel_module;
 use super::{GpuContext, GpuRenderer};
 
@@ -28,14 +26,7 @@ impl Blit {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("blit"),
             entries: &[
-                entry(
-                    PARAMS,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
-                    },
-                ),
+                params_entry(wgpu::ShaderStages::FRAGMENT),
                 entry(
                     DISPLAY,
                     wgpu::BindingType::Buffer {

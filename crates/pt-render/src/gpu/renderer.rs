@@ -75,7 +75,7 @@ impl GpuRenderer {
         let params_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
         let geometry = Box::new(crate::scene::geometry(walls, spheres)?);
         let geometry_buf = geometry_buffer(&device, &geometry);
@@ -304,7 +304,7 @@ impl GpuRenderer {
         self.queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
     }
 
-    /// The uniform buffer of the parameters.
+    /// The (read-only storage) buffer of the parameters.
     pub fn params_buffer(&self) -> &wgpu::Buffer {
         &self.params_buf
     }
