@@ -383,46 +383,40 @@ pub struct SceneRun<'a> {
     pub mitsuba: Option<MitsubaRuns>,
 }
 
-/// (median time, mean relMSE) at each sample count that every seed of
-/// `strategy` on `backend` measured.
-fn common_curve(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<(f64, f64)> {
-    let sel: Vec<&Point> = points.iter().filter(|p| p.backend == *backend && p.strategy == strategy).collect();
-    let mut seeds: Vec<u32> = sel.iter().map(|p| p.seed).collect();
+/// (median time, mean relMSE) at each sample count that every seed
+/// measured, from (seed, spp, time, relMSE) rows.
+fn median_curve(rows: &[(u32, u32, f64, f64)]) -> Vec<(f64, f64)> {
+    let mut seeds: Vec<u32> = rows.iter().map(|r| r.0).collect();
     seeds.sort_unstable();
     seeds.dedup();
-    let mut spps: Vec<u32> = sel.iter().map(|p| p.spp).collect();
+    let mut spps: Vec<u32> = rows.iter().map(|r| r.1).collect();
     spps.sort_unstable();
     spps.dedup();
     spps.into_iter()
         .filter_map(|spp| {
-            let at: Vec<&&Point> = sel.iter().filter(|p| p.spp == spp).collect();
+            let at: Vec<_> = rows.iter().filter(|r| r.1 == spp).collect();
             (at.len() == seeds.len()).then(|| {
-                let (t, _, _) = median_min_max(at.iter().map(|p| p.time).collect());
-                (t, at.iter().map(|p| p.rel_mse).sum::<f64>() / at.len() as f64)
+                let (t, _, _) = median_min_max(at.iter().map(|r| r.2).collect());
+                (t, at.iter().map(|r| r.3).sum::<f64>() / at.len() as f64)
             })
         })
         .collect()
 }
 
-/// Mitsuba's curve of `sampler` the same way: median time, mean relMSE at
-/// each sample count every seed rendered.
+/// [`median_curve`] of `strategy` on `backend`.
+fn common_curve(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<(f64, f64)> {
+    let rows: Vec<_> = points
+        .iter()
+        .filter(|p| p.backend == *backend && p.strategy == strategy)
+        .map(|p| (p.seed, p.spp, p.time, p.rel_mse))
+        .collect();
+    median_curve(&rows)
+}
+
+/// [`median_curve`] of Mitsuba's `sampler`.
 fn mitsuba_curve(runs: &MitsubaRuns, sampler: &str) -> Vec<(f64, f64)> {
-    let sel: Vec<_> = runs.iter().filter(|r| r.0 == sampler).collect();
-    let mut seeds: Vec<u32> = sel.iter().map(|r| r.1).collect();
-    seeds.sort_unstable();
-    seeds.dedup();
-    let mut spps: Vec<u32> = sel.iter().map(|r| r.2).collect();
-    spps.sort_unstable();
-    spps.dedup();
-    spps.into_iter()
-        .filter_map(|spp| {
-            let at: Vec<_> = sel.iter().filter(|r| r.2 == spp).collect();
-            (at.len() == seeds.len()).then(|| {
-                let (t, _, _) = median_min_max(at.iter().map(|r| r.3).collect());
-                (t, at.iter().map(|r| r.4).sum::<f64>() / at.len() as f64)
-            })
-        })
-        .collect()
+    let rows: Vec<_> = runs.iter().filter(|r| r.0 == sampler).map(|r| (r.1, r.2, r.3, r.4)).collect();
+    median_curve(&rows)
 }
 
 /// A plotted line: its label, (time, relMSE) points and colour.
