@@ -248,6 +248,20 @@ mod tests {
     }
 
     #[test]
+    fn curve_sampler_reads_the_header_or_falls_back_to_independent() {
+        let dir = std::env::temp_dir().join(format!("pt-curve-sampler-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let named = dir.join("named.csv");
+        std::fs::write(&named, "spp,time_s,rel_mse, multijitter\n4,0.1,0.2\n").unwrap();
+        let old = dir.join("old.csv");
+        std::fs::write(&old, "spp,time_s,rel_mse\n4,0.1,0.2\n").unwrap();
+        assert_eq!(curve_sampler(&named), "multijitter");
+        assert_eq!(curve_sampler(&old), "independent");
+        assert_eq!(curve_sampler(&dir.join("missing.csv")), "independent");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn seed_times_interpolate_each_seed_log_log() {
         // Seed 1 halves its error... from 2e-3 at 1 s to 5e-4 at 2 s: 1e-3
         // is halfway in log error, so at sqrt(2) s. Seed 2 reaches it at

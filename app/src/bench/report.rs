@@ -199,10 +199,12 @@ count, with the median time and mean relMSE of its seeds, as ours. Our points ar
 renders above (default strategy). Times to relMSE 1e-3 are interpolated log-log.\n\n";
 
 /// The sampler named in the header of a curve from `compare.py` (its
-/// fourth column), if any.
-pub fn curve_sampler(path: &Path) -> Option<String> {
-    let text = std::fs::read_to_string(path).ok()?;
-    text.lines().next()?.split(',').nth(3).map(|s| s.trim().to_string()).filter(|s| !s.is_empty())
+/// fourth column); "independent" for curves written before it named one,
+/// which all used Mitsuba's independent sampler.
+pub fn curve_sampler(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let named = text.lines().next().and_then(|h| h.split(',').nth(3)).map(str::trim).filter(|s| !s.is_empty());
+    named.unwrap_or("independent").to_string()
 }
 
 /// The defaults and the measurements behind each: how much longer (or
@@ -366,7 +368,7 @@ pub(crate) fn mitsuba_section(csv: &PathBuf, points: &[Point]) -> Result<String>
         String::from(MITSUBA_FAIRNESS) + "| renderer | time to relMSE 1e-3 | ratio to Mitsuba |\n|---|---|---|\n";
     s.push_str(&format!(
         "| Mitsuba 3 llvm_ad_rgb, path, {} sampler (`{}`) | {} | 1 |\n",
-        curve_sampler(csv).unwrap_or_else(|| "independent".into()),
+        curve_sampler(csv),
         csv.display(),
         tm.map_or("not reached".into(), |t| format!("{t:.3} s"))
     ));

@@ -67,7 +67,7 @@ pub(crate) fn run(args: &BenchArgs) -> Result<()> {
         bench::write_csv(&csv, &points)?;
         let mut extra = Vec::new();
         if let Some(m) = &args.mitsuba_csv {
-            let sampler = bench::curve_sampler(m).unwrap_or_else(|| "independent".into());
+            let sampler = bench::curve_sampler(m);
             extra.push((format!("Mitsuba 3 llvm_ad_rgb, path, {sampler}"), bench::read_curve(m)?));
         }
         let png = args.out_dir.join("convergence.png");

@@ -15,8 +15,9 @@
 //! light that many bounces spread over every wall outweighs them. Either
 //! way the glow lobe's samples are spent where they are not needed, and
 //! MIS lets the BSDF rays that hit the light count: often around a large
-//! light, and along the long paths of a bright room. `pathtracer bench convergence --suite` measured the thresholds:
-//! see [`GLOW_MAX_EXTENT`] and [`GLOW_MAX_ALBEDO`].
+//! light, and along the long paths of a bright room. `pathtracer bench
+//! convergence --suite` measured the thresholds: see [`GLOW_MAX_EXTENT`]
+//! and [`GLOW_MAX_ALBEDO`].
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.

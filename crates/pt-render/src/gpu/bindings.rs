@@ -11,8 +11,8 @@ use pt_core::FrameParams;
 /// (`lvp_find_inlinable_uniforms`), and then, on every dispatch after the
 /// block was written, clones the shader, folds the values in and
 /// re-optimises it (`update_inline_shader_state`) before it looks for a
-/// compiled variant: 12 to 19 ms per dispatch of this kernel on 2 cores,
-/// whatever the image size. A storage buffer is never inlined.
+/// compiled variant: a fixed cost per dispatch, whatever the image size
+/// (docs/ARCHITECTURE.md). A storage buffer is never inlined.
 pub const PARAMS: u32 = 0;
 /// `Geometry` (uniform): the walls and spheres.
 pub const GEOMETRY: u32 = 1;
