@@ -131,6 +131,16 @@ impl Strategy {
     pub fn flags_for(&self, scene: &pt_render::Scene) -> u32 {
         (self.flags)(scene.default_flags())
     }
+
+    /// Whether this strategy, not the default itself, renders `scene` just
+    /// as the default does (NEE with MIS where the scene's default has
+    /// MIS): timing it again would measure only the machine's noise.
+    pub fn same_as_default_on(&self, scene: &pt_render::Scene) -> bool {
+        let d = StrategyId::Default.strategy();
+        self.id != StrategyId::Default
+            && self.flags_for(scene) == d.flags_for(scene)
+            && (self.rr_start, self.spp_per_frame) == (d.rr_start, d.spp_per_frame)
+    }
 }
 
 /// Samples per pixel per frame of `render` and of the default strategy.
@@ -245,6 +255,22 @@ mod tests {
             mape: 0.0,
             rmse: 0.0,
         }
+    }
+
+    #[test]
+    fn only_a_strategy_that_changes_nothing_on_a_scene_is_the_default_there() {
+        let small = pt_render::Scene::default_scene();
+        let mut large = small.clone();
+        large.light.radius = 0.5;
+        large.light.center.y = 1.35;
+        // The large light's default has MIS and no glow lobe (the rule in
+        // pt_render::strategy); the small light's has the glow lobe, no MIS.
+        assert_ne!(small.default_flags() & FLAG_MIS, large.default_flags() & FLAG_MIS);
+        let same = |scene: &pt_render::Scene| {
+            STRATEGIES.iter().filter(|s| s.same_as_default_on(scene)).map(|s| s.id).collect::<Vec<_>>()
+        };
+        assert_eq!(same(&small), []);
+        assert_eq!(same(&large), [StrategyId::NeeMis]);
     }
 
     #[test]

@@ -205,7 +205,7 @@ pub fn scene_curves(
             let curve_of = |pts: &[Point]| pts.iter().map(|p| (p.time, p.rel_mse)).collect::<Vec<_>>();
             let limit = time_to(&curve_of(&d), target).map_or(f64::INFINITY, |t| CUT_OFF * t);
             points.extend(d);
-            for st in STRATEGIES.iter().filter(|st| st.id != StrategyId::Default) {
+            for st in STRATEGIES.iter().filter(|st| st.id != StrategyId::Default && !st.same_as_default_on(scene)) {
                 let until = Until { target: Some(target + noise), time_limit: limit };
                 let mut c = curve(*device, scene, settings, st, seed, max_spp, reference, name, until)?;
                 without_reference_noise(&mut c, noise);
@@ -394,13 +394,16 @@ pub fn scene_markdown(points: &[Point], backends: &[BenchBackend], seeds: u32, t
     s.push('\n');
     for (i, st) in STRATEGIES.iter().enumerate() {
         let _ = write!(s, "| {} |", st.name);
-        for r in &results {
+        for (k, r) in results.iter().enumerate() {
             let x = &r.standings[i];
+            let ran = points.iter().any(|p| p.strategy == st.name && p.backend == backends[k]);
             let cell = match x.median {
                 Some(m) => {
                     let (_, lo, hi) = median_min_max(x.times.iter().map(|t| t.1).collect());
                     format!("{m:.3} s ({lo:.3}-{hi:.3})")
                 }
+                // `scene_curves` skips a strategy that is the default here.
+                None if !ran => "the default here".into(),
                 None => "not reached".into(),
             };
             let bold = r.best == Some(i);
@@ -582,8 +585,8 @@ pub fn suite_markdown(
     let _ = writeln!(
         s,
         "Every scene of `scenes/` at {w}x{h} pixels with its own bounce limit, {seeds} seeds per strategy and backend. \
-         Each seed renders the default first, then every other strategy, progressively, measuring relMSE at 4, 8, \
-         16, ... spp against the scene's cached reference, and stops a curve at the first measurement below \
+         Each seed renders the default first, then every other strategy (but one that renders the scene just as \
+         the default does: \"the default here\"), progressively, measuring relMSE at 4, 8, 16, ... spp against the scene's cached reference, and stops a curve at the first measurement below \
          {target:.0e} (or past {CUT_OFF}x the default's time of that seed: \"not reached\"). Times are read \
          log-log between measurements, per seed; the tables give the median and the seeds' range. The default's \
          gap is its time over the fastest strategy's (by median), seed for seed: median and range of the seeds' \
