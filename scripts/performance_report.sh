@@ -5,12 +5,34 @@
 #
 #   scripts/performance_report.sh          the default scene, then the suite
 #   scripts/performance_report.sh suite    the scene suite only
+#   scripts/performance_report.sh holdout  the held-out scenes only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p pathtracer
 bin=target/release/pathtracer
 out=docs/bench
 mkdir -p "$out"
+
+# Mitsuba's image of each scene of a suite's manifest agrees with our
+# reference: a paired t test per 16x16 region (our own default on each
+# scene of scenes/ is checked against it by a unit test).
+agreement() {
+    tail -n +2 "$1" | while IFS=$'\t' read -r name _file reference _rest; do
+        echo "$name: Mitsuba against our reference"
+        "$bin" compare "$2/$name.exr" --reference "$reference" --max-t 5 | tail -n 1
+    done
+}
+
+if [ "${1:-all}" = holdout ]; then
+    # The held-out scenes (scenes/holdout/): the same measurements as the
+    # suite's, in their own report, docs/bench/holdout.md.
+    hold=(--suite --suite-dir scenes/holdout --width 128 --height 128 --reference-spp 8192 --out-dir "$out/holdout")
+    "$bin" bench convergence "${hold[@]}" --reference-only
+    python3 scripts/mitsuba/compare.py --suite "$out/holdout/suite.tsv" "$out/holdout/mitsuba" --seeds 5
+    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/holdout/mitsuba" --report "$out/holdout.md"
+    agreement "$out/holdout/suite.tsv" "$out/holdout/mitsuba"
+    exit 0
+fi
 
 if [ "${1:-all}" != suite ]; then
     # 1. The reference (our CPU renderer, 100x the largest budget).
@@ -27,9 +49,4 @@ suite=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out")
 "$bin" bench convergence "${suite[@]}" --reference-only
 python3 scripts/mitsuba/compare.py --suite "$out/suite.tsv" "$out/mitsuba-suite" --seeds 5
 "$bin" bench convergence "${suite[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md
-# Mitsuba agrees with each reference: a paired t test per 16x16 region
-# (our own default on each scene is checked against it by a unit test).
-tail -n +2 "$out/suite.tsv" | while IFS=$'\t' read -r name _file reference _rest; do
-    echo "$name: Mitsuba against our reference"
-    "$bin" compare "$out/mitsuba-suite/$name.exr" --reference "$reference" --max-t 5 | tail -n 1
-done
+agreement "$out/suite.tsv" "$out/mitsuba-suite"

@@ -216,7 +216,11 @@ pub fn scene_curves(
         // screening's fastest other strategy, in turn, on fresh seeds.
         let Some(rival) = scene_result(&points, name, seeds, target).rival else { continue };
         for seed in (0..seeds).map(|k| CONFIRM_SEED + k) {
-            progress(&format!("{name}: confirming against {}, seed {} of {seeds}", STRATEGIES[rival].name, seed - CONFIRM_SEED + 1));
+            progress(&format!(
+                "{name}: confirming against {}, seed {} of {seeds}",
+                STRATEGIES[rival].name,
+                seed - CONFIRM_SEED + 1
+            ));
             let unbounded = Until { target: Some(target + noise), time_limit: f64::INFINITY };
             for st in [default, &STRATEGIES[rival]] {
                 let mut c = curve(*device, scene, settings, st, seed, max_spp, reference, name, unbounded)?;
@@ -571,12 +575,13 @@ pub fn plot_suite(
 }
 
 /// The suite's section of the report: the summary table, the plot, and
-/// each scene's table of strategies.
+/// each scene's table of strategies (the scenes of folder `dir`).
 pub fn suite_markdown(
     runs: &[SceneRun<'_>],
     backends: &[BenchBackend],
     seeds: u32,
     target: f64,
+    dir: &str,
     plot: &str,
     csv: &str,
 ) -> String {
@@ -584,7 +589,7 @@ pub fn suite_markdown(
     let (w, h) = runs.first().map_or((0, 0), |r| (r.settings.width, r.settings.height));
     let _ = writeln!(
         s,
-        "Every scene of `scenes/` at {w}x{h} pixels with its own bounce limit, {seeds} seeds per strategy and backend. \
+        "Every scene of `{dir}/` at {w}x{h} pixels with its own bounce limit, {seeds} seeds per strategy and backend. \
          Each seed renders the default first, then every other strategy (but one that renders the scene just as \
          the default does: \"the default here\"), progressively, measuring relMSE at 4, 8, 16, ... spp against the scene's cached reference, and stops a curve at the first measurement below \
          {target:.0e} (or past {CUT_OFF}x the default's time of that seed: \"not reached\"). Times are read \
@@ -602,7 +607,8 @@ pub fn suite_markdown(
     s.push_str("| scene | what it stresses | reference relMSE |");
     for b in backends {
         let l = b.kind.label();
-        let _ = write!(s, " {l}: default | {l}: fastest strategy | {l}: default's gap | {l}: default's gap, confirmed |");
+        let _ =
+            write!(s, " {l}: default | {l}: fastest strategy | {l}: default's gap | {l}: default's gap, confirmed |");
     }
     s.push_str(" Mitsuba's fastest sampler |");
     for b in backends {
@@ -623,13 +629,8 @@ pub fn suite_markdown(
                 let name = if i == 0 { "the default" } else { STRATEGIES[i].name };
                 format!("{name}, {}", secs(r.standings[i].median))
             });
-            let _ = write!(
-                s,
-                " {} | {fastest} | {} | {} |",
-                secs(r.standings[0].median),
-                gap_text(r),
-                confirmed_text(r)
-            );
+            let _ =
+                write!(s, " {} | {fastest} | {} | {} |", secs(r.standings[0].median), gap_text(r), confirmed_text(r));
         }
         let _ = write!(s, " {} |", best_m.map_or("-".into(), |(n, t)| format!("{n}, {t:.3} s")));
         for r in &results {

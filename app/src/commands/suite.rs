@@ -102,6 +102,7 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
         &backends,
         args.seeds,
         TARGET,
+        args.suite_dir.to_string_lossy().trim_end_matches('/'),
         &relative_to_report(&png, args.report.as_deref()),
         &relative_to_report(&csv, args.report.as_deref()),
     );
