@@ -104,7 +104,7 @@ pub const GLOW_REACH: f32 = 0.125;
 /// `1 - cos` of directions, which half the squared chord gives to a few
 /// 1e-8 near the axis; round a tinier light the lobe starts a little
 /// outside its cone, which NEE covers anyway.
-const GLOW_MIN_SCALE: f32 = 1e-6;
+pub const GLOW_MIN_SCALE: f32 = 1e-6;
 
 /// The glow lobe: directions around the light with solid-angle density
 /// proportional to `1 / x`, `x = 1 - cos` of the angle to the light's

@@ -25,7 +25,7 @@ impl Ray {
 /// the true surface by a few ulps of the largest magnitude involved (pbrt-v4,
 /// section 6.8, bounds it by gamma(7) ~ 7 eps for ray/plane). 32 eps keeps a
 /// wide safety factor and is still invisible: 4e-6 of the scene's size.
-const HIT_ERROR_EPS: f32 = 32.0 * f32::EPSILON;
+pub const HIT_ERROR_EPS: f32 = 32.0 * f32::EPSILON;
 
 /// Moves a surface point off its surface along the normal by more than its
 /// rounding error, so that a ray spawned from it toward the side of `normal`

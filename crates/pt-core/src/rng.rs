@@ -16,7 +16,9 @@ pub fn pcg_hash(v: u32) -> u32 {
 
 /// `pcg4d` four-dimensional hash (Jarzynski and Olano 2020).
 pub fn pcg4d(v: UVec4) -> UVec4 {
-    let mut v = v * 1_664_525 + UVec4::splat(1_013_904_223);
+    // Wrapping, as the reference's unsigned arithmetic (and not a panic in
+    // builds with overflow checks).
+    let mut v = v.wrapping_mul(UVec4::splat(1_664_525)).wrapping_add(UVec4::splat(1_013_904_223));
     v.x = v.x.wrapping_add(v.y.wrapping_mul(v.w));
     v.y = v.y.wrapping_add(v.z.wrapping_mul(v.x));
     v.z = v.z.wrapping_add(v.x.wrapping_mul(v.y));

@@ -21,9 +21,53 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
 /// The unit vector at the angle with cosine `cos_theta` and sine
 /// `sin_theta` from unit `axis`, turned by `2 pi u` about it.
 pub fn about_axis(axis: Vec3, cos_theta: f32, sin_theta: f32, u: f32) -> Vec3 {
-    let phi = 2.0 * PI * u;
+    #[cfg(target_arch = "spirv")]
+    let (sin_phi, cos_phi) = {
+        let phi = 2.0 * PI * u;
+        (phi.sin(), phi.cos())
+    };
+    #[cfg(not(target_arch = "spirv"))]
+    let (sin_phi, cos_phi) = sin_cos_turn(u);
     let (t, b) = orthonormal_basis(axis);
-    t * (sin_theta * phi.cos()) + b * (sin_theta * phi.sin()) + axis * cos_theta
+    t * (sin_theta * cos_phi) + b * (sin_theta * sin_phi) + axis * cos_theta
+}
+
+/// Taylor coefficients of sine (`a^3` to `a^9`) and cosine (`a^2` to
+/// `a^10`) for [`sin_cos_turn`]: on |a| <= pi/4 the first terms left out
+/// are below 2e-9 and 3e-9.
+#[cfg(not(target_arch = "spirv"))]
+pub const SIN_TAYLOR: [f32; 4] = [-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
+#[cfg(not(target_arch = "spirv"))]
+#[allow(missing_docs)]
+pub const COS_TAYLOR: [f32; 5] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0, -1.0 / 3_628_800.0];
+
+/// `(sin, cos)` of `2 pi u` on the CPU, by polynomials: the CPU's libm
+/// call per direction is a call per lane in the eight-lane path loop
+/// (`pt_render::lanes`), which evaluates these same operations on eight
+/// lanes at once and so gets the same bits. The kernel keeps the shader's
+/// own sine and cosine.
+///
+/// `4u` splits into a quarter turn `q` (rounded to nearest, ties to even)
+/// and a rest in [-1/2, 1/2], exactly; the rest, as an angle `a` of at most
+/// pi/4, goes through the Taylor polynomials, and `q` rotates the pair.
+/// Within 2.5e-7 of the true values (the tests check).
+#[cfg(not(target_arch = "spirv"))]
+#[inline]
+pub fn sin_cos_turn(u: f32) -> (f32, f32) {
+    let t = 4.0 * u;
+    let q = t.round_ties_even();
+    let a = (t - q) * (PI / 2.0);
+    let a2 = a * a;
+    let [s1, s2, s3, s4] = SIN_TAYLOR;
+    let [c1, c2, c3, c4, c5] = COS_TAYLOR;
+    let s = a + a * a2 * (s1 + a2 * (s2 + a2 * (s3 + a2 * s4)));
+    let c = 1.0 + a2 * (c1 + a2 * (c2 + a2 * (c3 + a2 * (c4 + a2 * c5))));
+    match (q as i32) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// `(cos, sin)` of the polar angle of [`cosine_hemisphere`]'s direction
@@ -93,6 +137,28 @@ mod tests {
         let se = ((0.5 - 4.0 / 9.0) / count as f64).sqrt();
         assert!((s1 / count as f64 - 2.0 / 3.0).abs() < 5.0 * se);
         assert!((s2 / count as f64 - 0.5).abs() < 5.0 * 2e-3);
+    }
+
+    /// `sin_cos_turn` against f64 sine and cosine at a million points of
+    /// [0, 1) and at the quarter turns, where the rounding of `4u` changes.
+    #[test]
+    fn sin_cos_turn_is_within_a_few_ulps() {
+        let check = |u: f32| {
+            let (s, c) = sin_cos_turn(u);
+            let phi = 2.0 * std::f64::consts::PI * u as f64;
+            let (es, ec) = ((s as f64 - phi.sin()).abs(), (c as f64 - phi.cos()).abs());
+            assert!(es < 2.5e-7 && ec < 2.5e-7, "u {u}: sin {s} cos {c}, errors {es:.2e} {ec:.2e}");
+        };
+        for i in 0..1_000_000u32 {
+            check(i as f32 / 1e6);
+        }
+        for q in [0.125f32, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0 - f32::EPSILON / 2.0] {
+            for u in [q, f32::from_bits(q.to_bits() - 1), f32::from_bits(q.to_bits() + 1)] {
+                check(u);
+            }
+        }
+        assert_eq!(sin_cos_turn(0.0), (0.0, 1.0));
+        assert_eq!(sin_cos_turn(0.5).1, -1.0);
     }
 
     #[test]

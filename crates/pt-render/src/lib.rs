@@ -4,6 +4,8 @@
 pub mod accuracy;
 pub mod cpu;
 pub mod gpu;
+#[cfg(target_arch = "x86_64")]
+pub mod lanes;
 pub mod metrics;
 pub mod output;
 pub mod parts;
