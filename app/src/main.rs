@@ -167,7 +167,8 @@ struct CompareArgs {
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
 enum BackendArg {
-    /// The GPU when a Vulkan adapter is present, else the CPU (with a notice).
+    /// The GPU when a hardware Vulkan adapter is present; else the CPU (with
+    /// a notice), which also outruns a software adapter where it has AVX2.
     Auto,
     /// The rust-gpu kernel on the best Vulkan adapter (a real GPU, else lavapipe).
     Gpu,

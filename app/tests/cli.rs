@@ -150,6 +150,23 @@ fn renders_exr_on_gpu() {
     renders_exr("gpu");
 }
 
+/// The default backend takes the Vulkan adapter when it is hardware, and
+/// the CPU beside a software one (lavapipe, as in CI) where the CPU
+/// renderer runs eight pixels at a time: the faster on the same cores.
+#[test]
+fn auto_backend_prefers_the_cpu_to_a_software_adapter() {
+    let ctx = pt_render::GpuContext::new().expect("a Vulkan adapter: scripts/test.sh installs lavapipe");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("img.exr");
+    let o = pathtracer(&["render", "--width", "8", "--height", "8", "--spp", "1", "--out", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let cpu = ctx.is_software() && pt_render::cpu::lanes_available();
+    assert_eq!(err.contains("rendering on the CPU, which is faster here"), cpu, "{err}");
+    assert_eq!(err.contains("\nCPU: "), cpu, "{err}");
+    assert_eq!(err.contains(&format!("GPU: {}", ctx.adapter_description())), !cpu, "{err}");
+}
+
 #[test]
 fn renders_png_of_the_requested_size() {
     let dir = tempfile::tempdir().unwrap();

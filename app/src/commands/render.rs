@@ -59,9 +59,20 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
     let ctx = match args.backend {
         BackendArg::Gpu => Some(GpuContext::new().context("cannot start the GPU renderer")?),
         BackendArg::Cpu => None,
-        BackendArg::Auto => {
-            GpuContext::new().inspect_err(|e| eprintln!("GPU unavailable ({e}); rendering on the CPU")).ok()
-        }
+        BackendArg::Auto => match GpuContext::new() {
+            // A software adapter (lavapipe) runs on the same cores as the
+            // CPU renderer, which is faster there when it runs eight
+            // pixels at a time (docs/PERFORMANCE.md, the scene suite).
+            Ok(ctx) if ctx.is_software() && pt_render::cpu::lanes_available() => {
+                eprintln!("the Vulkan adapter is a software one; rendering on the CPU, which is faster here");
+                None
+            }
+            Ok(ctx) => Some(ctx),
+            Err(e) => {
+                eprintln!("GPU unavailable ({e}); rendering on the CPU");
+                None
+            }
+        },
     };
     let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
     let display = (format == OutputFormat::Png).then_some((args.exposure, tonemap));

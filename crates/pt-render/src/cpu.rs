@@ -105,8 +105,9 @@ impl CpuRenderer {
     }
 }
 
-/// Whether this machine runs the eight-lane path loop.
-fn lanes_available() -> bool {
+/// Whether the CPU renderer runs eight pixels at a time on this machine
+/// ([`crate::lanes`]): then it is faster than lavapipe on the same cores.
+pub fn lanes_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         crate::lanes::available()
