@@ -32,14 +32,24 @@ pub fn about_axis(axis: Vec3, cos_theta: f32, sin_theta: f32, u: f32) -> Vec3 {
     t * (sin_theta * cos_phi) + b * (sin_theta * sin_phi) + axis * cos_theta
 }
 
-/// Taylor coefficients of sine (`a^3` to `a^9`) and cosine (`a^2` to
-/// `a^10`) for [`sin_cos_turn`]: on |a| <= pi/4 the first terms left out
-/// are below 2e-9 and 3e-9.
+/// `(sin a, cos a)` for |a| <= pi/4 by their Taylor polynomials, to `a^9`
+/// and `a^10` (the first terms left out are below 2e-9 and 3e-9), in
+/// Horner's form. Generic so that the CPU's eight-lane path loop
+/// (`pt_render::lanes`) runs these very operations on its vectors and gets
+/// the same bits as [`sin_cos_turn`].
 #[cfg(not(target_arch = "spirv"))]
-pub const SIN_TAYLOR: [f32; 4] = [-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362_880.0];
-#[cfg(not(target_arch = "spirv"))]
-#[allow(missing_docs)]
-pub const COS_TAYLOR: [f32; 5] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0, -1.0 / 3_628_800.0];
+#[inline(always)]
+pub fn sin_cos_taylor<T>(a: T) -> (T, T)
+where
+    T: Copy + core::ops::Add<Output = T> + core::ops::Mul<Output = T> + core::ops::Add<f32, Output = T>,
+    T: core::ops::Mul<f32, Output = T>,
+{
+    let a2 = a * a;
+    let sin = a + a * a2 * (a2 * (a2 * (a2 * (1.0 / 362_880.0) + -1.0 / 5040.0) + 1.0 / 120.0) + -1.0 / 6.0);
+    let cos =
+        a2 * (a2 * (a2 * (a2 * (a2 * (-1.0 / 3_628_800.0) + 1.0 / 40_320.0) + -1.0 / 720.0) + 1.0 / 24.0) + -0.5) + 1.0;
+    (sin, cos)
+}
 
 /// `(sin, cos)` of `2 pi u` on the CPU, by polynomials: the CPU's libm
 /// call per direction is a call per lane in the eight-lane path loop
@@ -56,12 +66,7 @@ pub const COS_TAYLOR: [f32; 5] = [-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40_320.0
 pub fn sin_cos_turn(u: f32) -> (f32, f32) {
     let t = 4.0 * u;
     let q = t.round_ties_even();
-    let a = (t - q) * (PI / 2.0);
-    let a2 = a * a;
-    let [s1, s2, s3, s4] = SIN_TAYLOR;
-    let [c1, c2, c3, c4, c5] = COS_TAYLOR;
-    let s = a + a * a2 * (s1 + a2 * (s2 + a2 * (s3 + a2 * s4)));
-    let c = 1.0 + a2 * (c1 + a2 * (c2 + a2 * (c3 + a2 * (c4 + a2 * c5))));
+    let (s, c) = sin_cos_taylor((t - q) * (PI / 2.0));
     match (q as i32) & 3 {
         0 => (s, c),
         1 => (c, -s),

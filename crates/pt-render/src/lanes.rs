@@ -38,7 +38,7 @@ use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
-use pt_core::sampling::{COS_TAYLOR, PI, SIN_TAYLOR};
+use pt_core::sampling::{PI, sin_cos_taylor};
 use pt_core::wall::EDGE_SLACK;
 
 /// Paths per group: the eight f32 lanes of an AVX2 register.
@@ -75,25 +75,31 @@ impl F {
         unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
         a
     }
+    /// The comparison `P` (ordered, quiet: false where a lane is NaN, as
+    /// Rust's operators are).
+    #[inline(always)]
+    fn cmp<const P: i32>(self, o: Self) -> M {
+        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<P>(self.0, o.0)) })
+    }
     #[inline(always)]
     fn lt(self, o: Self) -> M {
-        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0)) })
+        self.cmp::<_CMP_LT_OQ>(o)
     }
     #[inline(always)]
     fn gt(self, o: Self) -> M {
-        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0)) })
+        self.cmp::<_CMP_GT_OQ>(o)
     }
     #[inline(always)]
     fn le(self, o: Self) -> M {
-        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0)) })
+        self.cmp::<_CMP_LE_OQ>(o)
     }
     #[inline(always)]
     fn ge(self, o: Self) -> M {
-        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0)) })
+        self.cmp::<_CMP_GE_OQ>(o)
     }
     #[inline(always)]
     fn eq(self, o: Self) -> M {
-        M(unsafe { _mm256_castps_si256(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0)) })
+        self.cmp::<_CMP_EQ_OQ>(o)
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -682,12 +688,7 @@ fn about_axis(axis: V3, cos_theta: F, sin_theta: F, u: F) -> V3 {
 fn sin_cos_turn(u: F) -> (F, F) {
     let t = 4.0 * u;
     let q = F(unsafe { _mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(t.0) });
-    let a = (t - q) * (PI / 2.0);
-    let a2 = a * a;
-    let [s1, s2, s3, s4] = SIN_TAYLOR;
-    let [c1, c2, c3, c4, c5] = COS_TAYLOR;
-    let s = a + a * a2 * (s1 + a2 * (s2 + a2 * (s3 + a2 * s4)));
-    let c = 1.0 + a2 * (c1 + a2 * (c2 + a2 * (c3 + a2 * (c4 + a2 * c5))));
+    let (s, c) = sin_cos_taylor((t - q) * (PI / 2.0));
     let q = U(unsafe { _mm256_cvtps_epi32(q.0) });
     let odd = q.and(U::splat(1)).eq(U::splat(1));
     // Quarter turns 2 and 3 negate the sine, 1 and 2 the cosine.
