@@ -181,6 +181,7 @@ mod tests {
             // No wall here has everything on one side, so none is culled.
             let walls = ShadowWalls::new(&params, &geometry);
             assert_eq!(walls, ShadowWalls::all(&params), "{wall_count} walls");
+            assert!((0..100).all(|k| walls.contains(k) == (k < wall_count)), "{wall_count} walls");
             for k in [0u32, 1, 31, 32, 33, 63, 64, 65, 95] {
                 let ray = Ray { origin: Vec3::new(3.0 * k as f32 + 0.5, 0.5, -(k as f32) - 0.5), dir: Vec3::Z };
                 let in_use = k < wall_count;

@@ -166,6 +166,19 @@ impl ShadowWalls {
         walls
     }
 
+    /// Whether wall `i` can block a shadow ray (is in the mask).
+    #[inline]
+    pub fn contains(&self, i: u32) -> bool {
+        let word = if i < 32 {
+            self.low
+        } else if i < 64 {
+            self.middle
+        } else {
+            self.high
+        };
+        i < 96 && (word >> (i % 32)) & 1 != 0
+    }
+
     /// Whether no wall can block a shadow ray.
     #[inline]
     pub fn is_empty(&self) -> bool {

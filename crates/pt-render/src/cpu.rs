@@ -38,14 +38,10 @@ impl CpuRenderer {
 
     /// Runs every frame one pixel at a time, as the kernel does, even where
     /// the eight-lane loop is available: for tests that compare the two.
-    pub fn one_pixel_at_a_time(mut self) -> Self {
+    #[cfg(test)]
+    fn one_pixel_at_a_time(mut self) -> Self {
         self.lanes = false;
         self
-    }
-
-    /// Whether frames run eight pixels at a time.
-    pub fn runs_lanes(&self) -> bool {
-        self.lanes
     }
 
     /// The current parameters.
@@ -135,8 +131,8 @@ mod tests {
         params.tile = Tile { x: 5, y: 7, width: 19, height: 9 };
         let new = || CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
         let (mut lanes, mut single) = (new(), new().one_pixel_at_a_time());
-        assert_eq!(lanes.runs_lanes(), cfg!(target_arch = "x86_64") && lanes_available());
-        assert!(!single.runs_lanes());
+        assert_eq!(lanes.lanes, cfg!(target_arch = "x86_64") && lanes_available());
+        assert!(!single.lanes);
         for spp in [4, 1, 9] {
             lanes.render_frame(spp);
             single.render_frame(spp);

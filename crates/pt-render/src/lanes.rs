@@ -36,6 +36,7 @@ use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
 use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
 use pt_core::sampling::{PI, sin_cos_taylor};
@@ -599,13 +600,13 @@ struct Frame<'a> {
 impl<'a> Frame<'a> {
     fn new(params: &'a FrameParams, geometry: &'a Geometry) -> Self {
         let walls = params.wall_count.min(MAX_WALLS as u32);
+        // The scalar loop's mask, as a list the shadow test runs through.
+        let mask = ShadowWalls::new(params, geometry);
         let mut shadow_walls = [0; MAX_WALLS];
         let mut shadow_wall_count = 0;
-        for i in 0..walls {
-            if !geometry.walls[i as usize].cannot_shadow(&params.light) {
-                shadow_walls[shadow_wall_count] = i;
-                shadow_wall_count += 1;
-            }
+        for i in (0..walls).filter(|&i| mask.contains(i)) {
+            shadow_walls[shadow_wall_count] = i;
+            shadow_wall_count += 1;
         }
         Self {
             params,
