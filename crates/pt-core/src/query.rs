@@ -98,7 +98,7 @@ pub const NO_WALL: u32 = u32::MAX;
 /// The walls and spheres in use, clamped to the block's arrays: the loops
 /// below then need no bounds checks, and a bad count cannot read past them.
 #[inline]
-fn counts(params: &FrameParams) -> (u32, u32) {
+pub fn counts(params: &FrameParams) -> (u32, u32) {
     (params.wall_count.min(MAX_WALLS as u32), params.sphere_count.min(MAX_SPHERES as u32))
 }
 

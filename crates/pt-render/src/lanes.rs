@@ -599,7 +599,7 @@ struct Frame<'a> {
 
 impl<'a> Frame<'a> {
     fn new(params: &'a FrameParams, geometry: &'a Geometry) -> Self {
-        let walls = params.wall_count.min(MAX_WALLS as u32);
+        let (walls, spheres) = pt_core::query::counts(params);
         // The scalar loop's mask, as a list the shadow test runs through.
         let mask = ShadowWalls::new(params, geometry);
         let mut shadow_walls = [0; MAX_WALLS];
@@ -612,7 +612,7 @@ impl<'a> Frame<'a> {
             params,
             geometry,
             walls,
-            spheres: params.sphere_count.min(MAX_SPHERES as u32),
+            spheres,
             shadow_walls,
             shadow_wall_count,
             nee: params.flags & FLAG_NEE != 0,
