@@ -19,7 +19,9 @@ pub use convergence::*;
 pub use report::*;
 pub use throughput::*;
 
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+use pt_core::params::{
+    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+};
 use pt_render::scene::DEFAULT_RR_START;
 
 /// Which backend a measurement ran on.
@@ -96,6 +98,9 @@ pub enum StrategyId {
     Spp4,
     /// Sobol points for every draw of a path.
     SobolEverywhere,
+    /// NEE uniform in the light's cone everywhere, never by projected
+    /// solid angle.
+    NeeUniform,
 }
 
 impl StrategyId {
@@ -160,10 +165,10 @@ const _: () = assert!(
 /// The strategies compared; the first is the default configuration (the
 /// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
 /// each other changes one thing from it on the same scene.
-pub const STRATEGIES: [Strategy; 11] = [
+pub const STRATEGIES: [Strategy; 12] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE (no MIS), glow lobe unless the light is large, RR from 5, 64 spp/frame",
+        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe unless the light is large, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -229,6 +234,13 @@ pub const STRATEGIES: [Strategy; 11] = [
         id: StrategyId::SobolEverywhere,
         name: "Sobol for every draw",
         flags: |f| f | FLAG_SOBOL_DEEP,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::NeeUniform,
+        name: "NEE uniform in the light's cone (no projected solid angle)",
+        flags: |f| f & !FLAG_NEE_PROJECTED,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },

@@ -278,6 +278,12 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          viewer's checkbox) for large or near lights, whose cone reaches below a surface's horizon: cone \
          samples there are lost and BSDF samples find the visible part. At the last vertex no BSDF ray is \
          traced either way.\n\
+         - NEE by projected solid angle where the light's cone lies wholly above a vertex's horizon: the \
+         cone's circle on the unit sphere, dropped onto the tangent plane, is an ellipse; a point uniform in \
+         it, lifted back, has density proportional to the cosine, so a shadow ray that reaches the light \
+         carries the exact unoccluded estimate (`LightCone::sample_projected`) and only shadow edges are \
+         noisy. Uniform in the cone everywhere instead: {}. Vertices whose cone crosses the horizon sample it \
+         uniformly.\n\
          - BSDF sampling: the cosine lobe mixed with the glow lobe around the light (probability 0.25, reach \
          0.125 in 1 - cos past the light's cone, density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` \
          in pt-core). Cosine lobe \
@@ -309,6 +315,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
         vs_default(StrategyId::Spp4),
         vs_default(StrategyId::NeeMis),
         vs_default(StrategyId::BsdfOnly),
+        vs_default(StrategyId::NeeUniform),
         vs_default(StrategyId::GlowSwitched),
     )
 }

@@ -8,7 +8,9 @@ use crate::bsdf::Scatter;
 use crate::geometry::Geometry;
 use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
-use crate::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams};
+use crate::params::{
+    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
+};
 use crate::query::{HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
@@ -135,18 +137,26 @@ impl<S: Sampler> Path<S> {
         // After the last vertex no light found by the BSDF counts (MIS weight
         // 0), so the glow lobe could only find background there.
         let scatter = Scatter::new(n, &cone, params.flags & FLAG_GLOW != 0 && !last);
+        // Where the whole cone is above the horizon NEE samples it by
+        // projected solid angle and takes all of the light (no MIS).
+        let projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);
         if nee && !cone.is_empty() {
             let u = self.sampler.next_2d();
-            let (dir, dist) = cone.sample(u.x, u.y);
+            let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
             let cos = n.dot(dir);
             if cos > 0.0 {
                 let shadow = Ray { origin, dir };
                 rays.ray();
                 if !scene.occluded(&shadow, params, shadow_walls, wall_index, dist) {
-                    let bsdf = cos * (1.0 / PI);
-                    let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
-                    // f cos / pdf = (albedo / pi) cos / cone_pdf
-                    self.radiance += self.throughput * albedo * light.radiance * (bsdf * weight / cone_pdf);
+                    let value = if projected {
+                        cone.projected_over_pi(n)
+                    } else {
+                        let bsdf = cos * (1.0 / PI);
+                        let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
+                        // f cos / pdf = (albedo / pi) cos / cone_pdf
+                        bsdf * weight / cone_pdf
+                    };
+                    self.radiance += self.throughput * albedo * light.radiance * value;
                 }
             }
         }
@@ -158,7 +168,8 @@ impl<S: Sampler> Path<S> {
         // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
         // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
         // the surface carries nothing and ends the path. After the last
-        // vertex a BSDF-found light has MIS weight 0: its pdf is kept as 0 for
+        // vertex, and after one whose NEE sampled by projected solid angle, a
+        // BSDF-found light has MIS weight 0: its pdf is kept as 0 for
         // `power_heuristic`.
         let dir = scatter.sample(self.sampler.next_2d());
         let cos = n.dot(dir);
@@ -166,7 +177,7 @@ impl<S: Sampler> Path<S> {
         if !(cos > 0.0 && pdf > 0.0) {
             return true;
         }
-        self.bsdf_pdf = if last { 0.0 } else { pdf };
+        self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
         self.nee_pdf = cone_pdf;
         self.throughput *= albedo * (cos * (1.0 / PI) / pdf);
         self.bounces += 1;

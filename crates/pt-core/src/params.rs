@@ -18,11 +18,19 @@ pub const FLAG_SOBOL: u32 = 4;
 /// `flags` bit: BSDF sampling mixes the glow lobe around the light
 /// (`light::GlowLobe`) into the cosine lobe.
 pub const FLAG_GLOW: u32 = 16;
+/// `flags` bit, with `FLAG_NEE`: where the light's cone lies wholly above
+/// a vertex's horizon, NEE samples it by projected solid angle
+/// (`LightCone::sample_projected`), whose estimate is exact wherever the
+/// light is wholly visible or hidden; BSDF rays that reach the light from
+/// such a vertex count nothing, with or without MIS. Elsewhere NEE samples
+/// the cone uniformly, as without the flag.
+pub const FLAG_NEE_PROJECTED: u32 = 64;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
-/// (without MIS) and the glow lobe, on Owen-scrambled Sobol samples for the
+/// (without MIS, by projected solid angle where the light is wholly above
+/// the horizon) and the glow lobe, on Owen-scrambled Sobol samples for the
 /// first draws of each path. MIS makes the same image in the default scene
 /// and costs more per sample.
-pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_SOBOL | FLAG_GLOW;
+pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_NEE_PROJECTED | FLAG_SOBOL | FLAG_GLOW;
 
 // Comparison-only flags. `pathtracer bench` sets them to compare
 // alternatives with the default, and the accuracy suite to check that they

@@ -21,15 +21,24 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
 /// The unit vector at the angle with cosine `cos_theta` and sine
 /// `sin_theta` from unit `axis`, turned by `2 pi u` about it.
 pub fn about_axis(axis: Vec3, cos_theta: f32, sin_theta: f32, u: f32) -> Vec3 {
-    #[cfg(target_arch = "spirv")]
-    let (sin_phi, cos_phi) = {
-        let phi = 2.0 * PI * u;
-        (phi.sin(), phi.cos())
-    };
-    #[cfg(not(target_arch = "spirv"))]
-    let (sin_phi, cos_phi) = sin_cos_turn(u);
+    let (sin_phi, cos_phi) = sin_cos_of_turn(u);
     let (t, b) = orthonormal_basis(axis);
     t * (sin_theta * cos_phi) + b * (sin_theta * sin_phi) + axis * cos_theta
+}
+
+/// `(sin, cos)` of the angle `2 pi u`: the shader's own functions in the
+/// kernel, [`sin_cos_turn`] on the CPU.
+#[inline(always)]
+pub fn sin_cos_of_turn(u: f32) -> (f32, f32) {
+    #[cfg(target_arch = "spirv")]
+    {
+        let phi = 2.0 * PI * u;
+        (phi.sin(), phi.cos())
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        sin_cos_turn(u)
+    }
 }
 
 /// `(sin a, cos a)` for |a| <= pi/4 by their Taylor polynomials, to `a^9`

@@ -15,7 +15,9 @@
 use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
+use pt_core::params::{
+    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
+};
 use pt_core::rng::Rng;
 use pt_core::{FrameParams, Sphere, SphereLight, Wall, light};
 
@@ -408,8 +410,10 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 9] = [
+    let variants: [Variant; 11] = [
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
+        ("NEE uniform in the light's cone, not by projected solid angle", |s| s.flags &= !FLAG_NEE_PROJECTED),
+        ("NEE uniform in the light's cone, with MIS", |s| s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_MIS),
         ("Sobol points for every draw, not the first ones only", |s| s.flags |= FLAG_SOBOL_DEEP),
         ("the glow lobe off (cosine BSDF sampling only)", |s| s.flags &= !FLAG_GLOW),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),

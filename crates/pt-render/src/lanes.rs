@@ -35,7 +35,9 @@ use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+use pt_core::params::{
+    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
@@ -327,6 +329,10 @@ impl V3 {
         (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
     }
     #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self { x: self.y * o.z - o.y * self.z, y: self.z * o.x - o.z * self.x, z: self.x * o.y - o.x * self.y }
+    }
+    #[inline(always)]
     fn scale(self, k: F) -> Self {
         Self { x: self.x * k, y: self.y * k, z: self.z * k }
     }
@@ -591,6 +597,7 @@ struct Frame<'a> {
     shadow_walls: [u32; MAX_WALLS],
     shadow_wall_count: usize,
     nee: bool,
+    projected: bool,
     mis: bool,
     glow: bool,
     luminance_rr: bool,
@@ -616,6 +623,7 @@ impl<'a> Frame<'a> {
             shadow_walls,
             shadow_wall_count,
             nee: params.flags & FLAG_NEE != 0,
+            projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
             glow: params.flags & FLAG_GLOW != 0,
             luminance_rr: params.flags & FLAG_RR_LUMINANCE != 0,
@@ -746,6 +754,47 @@ impl Cone {
         let sin_theta = sin2.max(F::splat(0.0)).sqrt();
         let dir = about_axis(self.axis, cos_theta, sin_theta, u2);
         let dist = self.dist * (cos_theta - (self.sin2_max - sin2).max(F::splat(0.0)).sqrt());
+        (dir, dist)
+    }
+
+    #[inline(always)]
+    fn above_horizon(&self, n: V3) -> M {
+        let c = n.dot(self.axis);
+        !self.empty & c.gt(F::splat(0.0)) & (c * c).ge(self.sin2_max)
+    }
+
+    #[inline(always)]
+    fn projected_over_pi(&self, n: V3) -> F {
+        self.sin2_max * n.dot(self.axis)
+    }
+
+    #[inline(always)]
+    fn sample_projected(&self, n: V3, u1: F, u2: F) -> (V3, F) {
+        let c = n.dot(self.axis);
+        let toward = self.axis - n.scale(c);
+        let s2 = toward.dot(toward);
+        let tilted = s2.gt(F::splat(1e-12));
+        let t1 = toward.div(s2.sqrt());
+        let t2 = n.cross(t1);
+        // orthonormal_basis(n) where the light is at the zenith.
+        let sign = sel(n.z.ge(F::splat(0.0)), F::splat(1.0), F::splat(-1.0));
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let b1 = V3 { x: 1.0 + sign * n.x * n.x * a, y: sign * b, z: -sign * n.x };
+        let b2 = V3 { x: b, y: sign + n.y * n.y * a, z: -n.y };
+        let (t1, t2) = (selv(tilted, t1, b1), selv(tilted, t2, b2));
+        let sin_half = self.sin2_max.sqrt();
+        let cos_half = 1.0 - self.one_minus_cos_max;
+        let r = u1.sqrt();
+        let (sin_phi, cos_phi) = sin_cos_turn(u2);
+        let x = cos_half * s2.sqrt() + sin_half * c * (r * cos_phi);
+        let y = sin_half * (r * sin_phi);
+        let h = (1.0 - x * x - y * y).max(F::splat(0.0)).sqrt();
+        let dir = t1.scale(x) + t2.scale(y) + n.scale(h);
+        let chord = dir - self.axis;
+        let one_minus_cos = 0.5 * chord.dot(chord);
+        let sin2 = one_minus_cos * (2.0 - one_minus_cos);
+        let dist = self.dist * (1.0 - one_minus_cos - (self.sin2_max - sin2).max(F::splat(0.0)).sqrt());
         (dir, dist)
     }
 }
@@ -979,10 +1028,16 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
             M::splat(false)
         };
         let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live);
+        let projected = if frame.nee && frame.projected { cone.above_horizon(n) } else { M::splat(false) };
         if frame.nee {
             let m = live & !cone.empty;
             let (u1, u2) = self.sampler.next_2d(m);
-            let (dir, dist) = cone.sample(u1, u2);
+            let (mut dir, mut dist) = cone.sample(u1, u2);
+            let projected = projected & m;
+            if projected.any() {
+                let (p_dir, p_dist) = cone.sample_projected(n, u1, u2);
+                (dir, dist) = (selv(projected, p_dir, dir), sel(projected, p_dist, dist));
+            }
             let cos = n.dot(dir);
             let shoot = m & cos.gt(F::splat(0.0));
             if shoot.any() {
@@ -993,7 +1048,8 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
                 } else {
                     F::splat(1.0)
                 };
-                let add = (self.throughput * albedo).mulv(light.radiance).scale(bsdf * weight / cone_pdf);
+                let value = sel(projected, cone.projected_over_pi(n), bsdf * weight / cone_pdf);
+                let add = (self.throughput * albedo).mulv(light.radiance).scale(value);
                 self.radiance = selv(shoot & !blocked, self.radiance + add, self.radiance);
             }
         }
@@ -1010,7 +1066,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         let ok = cos.gt(F::splat(0.0)) & pdf.gt(F::splat(0.0));
         ended = ended | (live & !ok);
         live = live & ok;
-        self.bsdf_pdf = sel(live, sel(last, F::splat(0.0), pdf), self.bsdf_pdf);
+        self.bsdf_pdf = sel(live, sel(last | projected, F::splat(0.0), pdf), self.bsdf_pdf);
         self.nee_pdf = sel(live, cone_pdf, self.nee_pdf);
         let throughput = self.throughput * albedo.scale(cos * (1.0 / PI) / pdf);
         self.throughput = selv(live, throughput, self.throughput);
@@ -1222,8 +1278,14 @@ mod tests {
         assert!(available(), "this test needs a CPU with AVX2, which the CPU renderer uses where it has it");
         let mut checked = 0;
         for (name, base, geometry) in scenes() {
-            for flags in 0..64u32 {
-                let known = FLAG_NEE | FLAG_MIS | FLAG_SOBOL | FLAG_RR_LUMINANCE | FLAG_GLOW | FLAG_SOBOL_DEEP;
+            for flags in 0..128u32 {
+                let known = FLAG_NEE
+                    | FLAG_MIS
+                    | FLAG_SOBOL
+                    | FLAG_RR_LUMINANCE
+                    | FLAG_GLOW
+                    | FLAG_SOBOL_DEEP
+                    | FLAG_NEE_PROJECTED;
                 assert_eq!(flags & !known, 0);
                 for (max_bounces, spp) in [(5, 7), (1, 1), (16, 7), (5, 0)] {
                     let params =
@@ -1246,6 +1308,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 5 * 64 * 3 * 32);
+        assert_eq!(checked, 5 * 128 * 3 * 32);
     }
 }
