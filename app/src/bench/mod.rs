@@ -20,7 +20,7 @@ pub use report::*;
 pub use throughput::*;
 
 use pt_core::params::{
-    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
 
@@ -89,9 +89,11 @@ pub enum StrategyId {
     NeeMis,
     /// BSDF sampling alone.
     BsdfOnly,
-    /// The glow lobe switched: the cosine lobe alone where the default mixes
-    /// in the glow lobe, the glow lobe mixed in where the default has none.
-    GlowSwitched,
+    /// The cosine lobe alone, no glow lobe.
+    GlowOff,
+    /// The glow lobe's probability switched: a tenth where the default has
+    /// a quarter, and the other way round.
+    GlowShareSwitched,
     /// 16 samples per pixel per frame.
     Spp16,
     /// 4 samples per pixel per frame.
@@ -165,10 +167,10 @@ const _: () = assert!(
 /// The strategies compared; the first is the default configuration (the
 /// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
 /// each other changes one thing from it on the same scene.
-pub const STRATEGIES: [Strategy; 12] = [
+pub const STRATEGIES: [Strategy; 13] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe unless the light is large, RR from 5, 64 spp/frame",
+        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe (a quarter, a tenth around large lights), RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -216,9 +218,16 @@ pub const STRATEGIES: [Strategy; 12] = [
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
-        id: StrategyId::GlowSwitched,
-        name: "glow lobe switched (off where the default has it, else on)",
-        flags: |f| f ^ FLAG_GLOW,
+        id: StrategyId::GlowOff,
+        name: "glow lobe off (cosine lobe only)",
+        flags: |f| f & !FLAG_GLOW,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::GlowShareSwitched,
+        name: "glow lobe share switched (a tenth where the default has a quarter, else a quarter)",
+        flags: |f| f ^ FLAG_GLOW_SPARSE,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },

@@ -286,8 +286,8 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          uniformly.\n\
          - BSDF sampling: the cosine lobe mixed with the glow lobe around the light (probability 0.25, reach \
          0.125 in 1 - cos past the light's cone, density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` \
-         in pt-core). Cosine lobe \
-         alone: {}. Nearly all of the remaining error is indirect light, and much of it comes from the bright ceiling \
+         in pt-core; probability 0.1 around large lights and in bright rooms, `FLAG_GLOW_SPARSE`). Cosine lobe \
+         alone: {}; probability 0.1 here: {}. Nearly all of the remaining error is indirect light, and much of it comes from the bright ceiling \
          right above the light, which the cosine lobe finds rarely. The glow lobe's density falls as the \
          inverse square of the distance from the light, as the irradiance of surfaces around it does. (Not \
          measured by this bench: on the CPU at 256x256 and 64 spp, direct light alone, `render --max-bounces 1`, \
@@ -316,7 +316,8 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
         vs_default(StrategyId::NeeMis),
         vs_default(StrategyId::BsdfOnly),
         vs_default(StrategyId::NeeUniform),
-        vs_default(StrategyId::GlowSwitched),
+        vs_default(StrategyId::GlowOff),
+        vs_default(StrategyId::GlowShareSwitched),
     )
 }
 

@@ -9,8 +9,15 @@ use crate::light::{GlowLobe, LightCone};
 use crate::sampling::{PI, about_axis, cosine_polar};
 
 /// Probability that BSDF sampling draws from the glow lobe instead of the
-/// cosine lobe (with `FLAG_GLOW`): chosen by `pathtracer bench`.
+/// cosine lobe (with `FLAG_GLOW`): chosen by `pathtracer bench` around
+/// small lights, whose surroundings outshine the rest of the room.
 pub const GLOW_PROBABILITY: f32 = 0.25;
+
+/// The glow lobe's probability with `FLAG_GLOW_SPARSE`: around large
+/// lights, and in bright rooms, where the light's surroundings outshine the
+/// room less. Chosen by `pathtracer bench convergence --suite` among 0.05,
+/// 0.1, 0.15 and 0.25 (docs/ARCHITECTURE.md, "Per-scene defaults").
+pub const GLOW_PROBABILITY_SPARSE: f32 = 0.1;
 
 /// BSDF sampling at a diffuse vertex: the cosine lobe about the shading
 /// normal, mixed with the glow lobe around the light. One draw picks a lobe
@@ -26,15 +33,16 @@ pub struct Scatter {
 }
 
 impl Scatter {
-    /// Sampling about unit normal `n`, with the glow lobe around `cone` when
-    /// `glow` is set, the cone is not empty and the lobe is not wholly below
-    /// the surface (the unlit side of a sphere keeps all of its samples).
-    /// Without it the lobe is not built (a logarithm per vertex).
+    /// Sampling about unit normal `n`, with the glow lobe around `cone`
+    /// picked with probability `glow` when that is not 0, the cone is not
+    /// empty and the lobe is not wholly below the surface (the unlit side of
+    /// a sphere keeps all of its samples). Without it the lobe is not built
+    /// (a logarithm per vertex).
     #[inline]
-    pub fn new(n: Vec3, cone: &LightCone, glow: bool) -> Self {
-        let glow = glow && !cone.is_empty();
-        let lobe = if glow { GlowLobe::new(cone) } else { GlowLobe::UNUSED };
-        let glow_probability = if glow && !lobe.below_horizon(n) { GLOW_PROBABILITY } else { 0.0 };
+    pub fn new(n: Vec3, cone: &LightCone, glow: f32) -> Self {
+        let on = glow > 0.0 && !cone.is_empty();
+        let lobe = if on { GlowLobe::new(cone) } else { GlowLobe::UNUSED };
+        let glow_probability = if on && !lobe.below_horizon(n) { glow } else { 0.0 };
         Self { n, glow: lobe, glow_probability }
     }
 

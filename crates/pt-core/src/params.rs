@@ -25,6 +25,10 @@ pub const FLAG_GLOW: u32 = 16;
 /// such a vertex count nothing, with or without MIS. Elsewhere NEE samples
 /// the cone uniformly, as without the flag.
 pub const FLAG_NEE_PROJECTED: u32 = 64;
+/// `flags` bit, with `FLAG_GLOW`: BSDF sampling picks the glow lobe with
+/// probability `bsdf::GLOW_PROBABILITY_SPARSE` (0.1) instead of
+/// `bsdf::GLOW_PROBABILITY` (0.25): for large lights and bright rooms.
+pub const FLAG_GLOW_SPARSE: u32 = 128;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above
 /// the horizon) and the glow lobe, on Owen-scrambled Sobol samples for the

@@ -16,7 +16,8 @@ use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{
-    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
+    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
+    FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
 };
 use pt_core::rng::Rng;
 use pt_core::{FrameParams, Sphere, SphereLight, Wall, light};
@@ -410,7 +411,8 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 11] = [
+    let variants: [Variant; 12] = [
+        ("the glow lobe at a tenth of the samples, with MIS", |s| s.flags |= FLAG_GLOW_SPARSE | FLAG_MIS),
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("NEE uniform in the light's cone, not by projected solid angle", |s| s.flags &= !FLAG_NEE_PROJECTED),
         ("NEE uniform in the light's cone, with MIS", |s| s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_MIS),

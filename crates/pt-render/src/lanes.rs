@@ -30,13 +30,13 @@ use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use pt_core::FrameParams;
 use pt_core::accum::PixelSamples;
-use pt_core::bsdf::GLOW_PROBABILITY;
+use pt_core::bsdf::{GLOW_PROBABILITY, GLOW_PROBABILITY_SPARSE};
 use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
 use pt_core::params::{
-    FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
 };
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
@@ -600,6 +600,8 @@ struct Frame<'a> {
     projected: bool,
     mis: bool,
     glow: bool,
+    /// The glow lobe's probability where it is on.
+    glow_probability: f32,
     luminance_rr: bool,
     black_background: bool,
 }
@@ -626,6 +628,11 @@ impl<'a> Frame<'a> {
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
             glow: params.flags & FLAG_GLOW != 0,
+            glow_probability: if params.flags & FLAG_GLOW_SPARSE != 0 {
+                GLOW_PROBABILITY_SPARSE
+            } else {
+                GLOW_PROBABILITY
+            },
             luminance_rr: params.flags & FLAG_RR_LUMINANCE != 0,
             black_background: params.background.max_element() == 0.0,
         }
@@ -812,7 +819,7 @@ struct Scatter {
 
 impl Scatter {
     #[inline(always)]
-    fn new(n: V3, cone: &Cone, glow: M) -> Self {
+    fn new(n: V3, cone: &Cone, glow: M, probability: f32) -> Self {
         let glow = glow & !cone.empty;
         let (mut scale, mut reach, mut log_ratio) = (F::splat(1.0), F::splat(1.0), F::splat(1.0));
         let mut axis = V3::splat(Vec3::Z);
@@ -829,7 +836,7 @@ impl Scatter {
             axis = selv(glow, cone.axis, axis);
             // below_horizon: reach < 1 and n . axis < -sqrt(reach (2 - reach)).
             let below = reach.lt(F::splat(1.0)) & n.dot(axis).lt(-(reach * (2.0 - reach)).sqrt());
-            glow_probability = sel(glow & !below, F::splat(GLOW_PROBABILITY), glow_probability);
+            glow_probability = sel(glow & !below, F::splat(probability), glow_probability);
         }
         Self { n, axis, scale, reach, log_ratio, glow_probability }
     }
@@ -1027,7 +1034,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         } else {
             M::splat(false)
         };
-        let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live);
+        let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live, frame.glow_probability);
         let projected = if frame.nee && frame.projected { cone.above_horizon(n) } else { M::splat(false) };
         if frame.nee {
             let m = live & !cone.empty;
@@ -1278,14 +1285,15 @@ mod tests {
         assert!(available(), "this test needs a CPU with AVX2, which the CPU renderer uses where it has it");
         let mut checked = 0;
         for (name, base, geometry) in scenes() {
-            for flags in 0..128u32 {
+            for flags in 0..256u32 {
                 let known = FLAG_NEE
                     | FLAG_MIS
                     | FLAG_SOBOL
                     | FLAG_RR_LUMINANCE
                     | FLAG_GLOW
                     | FLAG_SOBOL_DEEP
-                    | FLAG_NEE_PROJECTED;
+                    | FLAG_NEE_PROJECTED
+                    | FLAG_GLOW_SPARSE;
                 assert_eq!(flags & !known, 0);
                 for (max_bounces, spp) in [(5, 7), (1, 1), (16, 7), (5, 0)] {
                     let params =
@@ -1308,6 +1316,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 5 * 128 * 3 * 32);
+        assert_eq!(checked, 5 * 256 * 3 * 32);
     }
 }

@@ -1,74 +1,55 @@
 //! The sampling strategy a scene renders with by default, chosen from what
 //! the scene is (docs/ARCHITECTURE.md, "Per-scene defaults").
 //!
-//! Three features decide:
+//! Two features decide:
 //! - how large the light looks from the room: the mean over the room's
 //!   surfaces of `1 - cos` of the half angle of the light's cone (its solid
 //!   angle over 2 pi), [`light_extent`];
-//! - how near the light is to a wall: the gap between the light and the
-//!   nearest wall, in light radii, [`light_clearance`];
 //! - how bright the room is: the area-weighted mean albedo of its surfaces,
 //!   [`mean_albedo`].
 //!
-//! The glow lobe (`pt_core::light::GlowLobe`) sends a quarter of the BSDF
-//! samples toward the light's bright surroundings, which the cosine lobe
-//! rarely finds around a small light in a room of middling albedo. Around
-//! a large light the cosine lobe finds them as often, and a light far from
-//! every surface has no bright surroundings to find; in a bright room the
-//! light that many bounces spread over every wall outweighs them. Either
-//! way the glow lobe's samples are spent where they are not needed, and
-//! MIS lets the BSDF rays that hit the light count: often around a large
-//! light, and along the long paths of a bright room. `pathtracer bench
-//! convergence --suite` measured the thresholds: see [`GLOW_MAX_EXTENT`],
-//! [`GLOW_MAX_EXTENT_NEAR_WALL`], [`NEAR_WALL_RADII`] and
-//! [`GLOW_MAX_ALBEDO`].
+//! The glow lobe (`pt_core::light::GlowLobe`) sends a share of the BSDF
+//! samples toward the light's bright surroundings. Around a small light in
+//! a room of middling albedo those outshine the rest of the room, which the
+//! cosine lobe rarely finds, and a quarter of the samples go there
+//! (`GLOW_PROBABILITY`). Around a large light the cosine lobe finds them
+//! more often, and in a bright room the light that many bounces spread
+//! over every wall outweighs them: a tenth of the samples go there
+//! (`FLAG_GLOW_SPARSE`), and MIS lets the BSDF rays that hit the light
+//! count, often around a large light and along the long paths of a bright
+//! room. `pathtracer bench convergence --suite` measured the thresholds:
+//! see [`GLOW_MAX_EXTENT`] and [`GLOW_MAX_ALBEDO`].
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.
 
 use pt_core::glam::Vec3;
 use pt_core::light::light_cone;
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_GLOW_SPARSE, FLAG_MIS, FLAGS_DEFAULT};
 
 use crate::scene::Scene;
 
 /// The largest light extent (mean `1 - cos` of the light's half angle over
-/// the room's surfaces) at which the glow lobe stays on. Measured on the
-/// scene suite at 128x128 (docs/PERFORMANCE.md): at extents up to 0.008
-/// (the default scene, 0.008; the corner light, 0.007; the near-wall light,
-/// 0.005) the glow lobe halves the time to relMSE 1e-3 or more; at 0.028 (a
-/// light of radius 0.25 in the middle of the room) it no longer helps, and
-/// at 0.093 (radius 0.5) it costs about 10%.
+/// the room's surfaces) at which the glow lobe takes a quarter of the BSDF
+/// samples; above it, a tenth. Measured on the scene suite at 128x128
+/// (relMSE at 128 spp on the CPU, 3 seeds; docs/PERFORMANCE.md): at extents
+/// up to 0.008 (the default scene, 0.008; the corner light, 0.007; the
+/// near-wall light, 0.005) a quarter is best among 0.05, 0.1, 0.15 and 0.25,
+/// with relMSE 8% to 38% below a tenth's; at 0.028 (a light of radius 0.25
+/// in the middle of the room), 0.032 (radius 0.3 below the ceiling) and
+/// 0.093 (radius 0.5) a tenth is 7% to 17% below a quarter and 7% to 29%
+/// below the cosine lobe alone.
 pub const GLOW_MAX_EXTENT: f32 = 0.015;
 
-/// The largest light extent at which the glow lobe stays on for a light
-/// within [`NEAR_WALL_RADII`] of a wall: the patch of wall beside it is
-/// then lit far more brightly than the rest of the room, and the glow lobe
-/// finds it. Measured on the scene suite at 128x128: a light of radius 0.3
-/// half a radius below the ceiling (extent 0.032) reached relMSE 1e-3 with
-/// the glow lobe in 0.83x the time without it on both backends, while a
-/// light of radius 0.25 in the middle of the room (extent 0.028, three
-/// radii from every wall) took 1.06x (lavapipe) and 1.17x (CPU) with it.
-/// Around a light of radius 0.5 below the ceiling (extent 0.093) the glow
-/// lobe costs 5% (lavapipe) and 21% (CPU) again; the bound sits between
-/// 0.032 and 0.093, at their geometric mean. Spheres do not count as
-/// walls: one beside a light catches only a small bright cap, and the
-/// central light, 0.63 radii above the large sphere, gains nothing.
-pub const GLOW_MAX_EXTENT_NEAR_WALL: f32 = 0.054;
-
-/// How near, in light radii, a wall must come to the light for
-/// [`GLOW_MAX_EXTENT_NEAR_WALL`] to apply: the suite's lights near a
-/// wall are 0.3 to 1 radius from it, the others 3 or more.
-pub const NEAR_WALL_RADII: f32 = 1.5;
-
-/// The largest mean albedo of the room at which the glow lobe stays on.
-/// Measured on the scene suite at 128x128: in the default scene (mean
-/// albedo 0.55) the glow lobe halves the time to relMSE 1e-3; in the same
-/// room with every albedo 0.9 and 16 bounces (mean 0.89) the cosine lobe
-/// alone takes three quarters of its time. The suite has no room in
-/// between: the threshold sits where the share of light that has bounced
-/// more than once, about `a / (1 - a)` of the once-bounced for albedo `a`,
-/// is halfway (geometrically) between the two, 3.
+/// The largest mean albedo of the room at which the glow lobe takes a
+/// quarter of the BSDF samples. Measured on the scene suite at 128x128: in
+/// the default scene (mean albedo 0.55) a quarter is best; in the same room
+/// with every albedo 0.9 and 16 bounces (mean 0.89) a tenth is best (relMSE
+/// at 128 spp 14% below the cosine lobe alone's and 33% below a quarter's).
+/// The suite has no room in between: the threshold sits where the share of
+/// light that has bounced more than once, about `a / (1 - a)` of the
+/// once-bounced for albedo `a`, is halfway (geometrically) between the two,
+/// 3.
 pub const GLOW_MAX_ALBEDO: f32 = 0.75;
 
 /// Sample points per wall edge and per sphere for [`light_extent`].
@@ -111,50 +92,11 @@ pub fn light_extent(scene: &Scene) -> f32 {
     if n == 0 { 0.0 } else { (sum / n as f64) as f32 }
 }
 
-/// How near the light comes to the room's walls: the gap between its
-/// surface and the nearest point of any wall, in light radii (0 where it
-/// touches or crosses one, infinite in a scene without walls).
-pub fn light_clearance(scene: &Scene) -> f32 {
-    let light = scene.light;
-    let c = light.center;
-    let nearest = scene.walls.iter().map(|w| (nearest_on_wall(&w.wall, c) - c).length()).fold(f32::INFINITY, f32::min);
-    (nearest - light.radius).max(0.0) / light.radius
-}
-
-/// The point of parallelogram `wall` nearest to `p`: its projection onto
-/// the plane where that falls inside, else the nearest point of its edges.
-fn nearest_on_wall(wall: &pt_core::Wall, p: Vec3) -> Vec3 {
-    let (o, u, v) = (wall.corner, wall.edge_u, wall.edge_v);
-    // Solve p - o = a u + b v + t n for (a, b) with the Gram matrix of u, v.
-    let d = p - o;
-    let (uu, uv, vv, du, dv) = (u.dot(u), u.dot(v), v.dot(v), d.dot(u), d.dot(v));
-    let det = uu * vv - uv * uv;
-    if det > 0.0 {
-        let a = (du * vv - dv * uv) / det;
-        let b = (dv * uu - du * uv) / det;
-        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
-            return o + a * u + b * v;
-        }
-    }
-    let on_segment = |s: Vec3, e: Vec3| {
-        let t = if e.length_squared() > 0.0 { ((p - s).dot(e) / e.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-        s + t * e
-    };
-    [on_segment(o, u), on_segment(o, v), on_segment(o + u, v), on_segment(o + v, u)]
-        .into_iter()
-        .min_by(|x, y| (*x - p).length_squared().total_cmp(&(*y - p).length_squared()))
-        .unwrap_or(o)
-}
-
-/// Whether the glow lobe pays on `scene`: a light that looks small from the
-/// room ([`GLOW_MAX_EXTENT`]), or not much larger and beside a wall
-/// ([`GLOW_MAX_EXTENT_NEAR_WALL`], [`NEAR_WALL_RADII`]), in a room of
+/// Whether the glow lobe pays at its full probability on `scene`: a light
+/// that looks small from the room ([`GLOW_MAX_EXTENT`]) in a room of
 /// middling albedo ([`GLOW_MAX_ALBEDO`]).
 pub fn glow_pays(scene: &Scene) -> bool {
-    let extent = light_extent(scene);
-    let small = extent <= GLOW_MAX_EXTENT;
-    let beside_wall = extent <= GLOW_MAX_EXTENT_NEAR_WALL && light_clearance(scene) <= NEAR_WALL_RADII;
-    (small || beside_wall) && mean_albedo(scene) <= GLOW_MAX_ALBEDO
+    light_extent(scene) <= GLOW_MAX_EXTENT && mean_albedo(scene) <= GLOW_MAX_ALBEDO
 }
 
 /// The area-weighted mean albedo (mean of the three channels) of the
@@ -170,10 +112,16 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 }
 
 /// The integrator flags `scene` renders with unless told otherwise: the
-/// project's defaults (`FLAGS_DEFAULT`) where the glow lobe pays
-/// ([`glow_pays`]), else without the glow lobe and with MIS.
+/// project's defaults (`FLAGS_DEFAULT`) where the glow lobe pays at its full
+/// probability ([`glow_pays`]), else the glow lobe at a tenth
+/// (`FLAG_GLOW_SPARSE`) and MIS.
 pub fn default_flags(scene: &Scene) -> u32 {
-    if glow_pays(scene) { FLAGS_DEFAULT } else { (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS }
+    if glow_pays(scene) { FLAGS_DEFAULT } else { sparse() }
+}
+
+/// The flags where the glow lobe does not pay at its full probability.
+fn sparse() -> u32 {
+    FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_MIS
 }
 
 #[cfg(test)]
@@ -210,65 +158,45 @@ mod tests {
     }
 
     #[test]
-    fn the_glow_lobe_stays_for_small_lights_and_goes_for_large_ones() {
+    fn the_glow_lobe_is_sparse_around_large_lights() {
         let default = Scene::default_scene();
         assert!(light_extent(&default) < GLOW_MAX_EXTENT);
         assert_eq!(default_flags(&default), FLAGS_DEFAULT);
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
         assert!(light_extent(&large) > 5.0 * GLOW_MAX_EXTENT);
-        assert_eq!(default_flags(&large), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
+        assert_eq!(default_flags(&large), FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_MIS);
+        // Radius 0.3 half a radius below the ceiling (extent 0.032) and
+        // radius 0.25 in the middle of the room (0.028): above the bound.
+        for (r, y) in [(0.3, 1.55), (0.25, 1.0)] {
+            let e = light_extent(&with_light(r, Vec3::new(0.0, y, 0.0)));
+            assert!(e > GLOW_MAX_EXTENT && e < 0.04, "{e}");
+            assert_eq!(default_flags(&with_light(r, Vec3::new(0.0, y, 0.0))), sparse());
+        }
         // The extent grows with the light's radius at a fixed centre.
         let radii = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45];
         let e: Vec<f32> = radii.iter().map(|&r| light_extent(&with_light(r, Vec3::new(0.0, 1.0, 0.0)))).collect();
         assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
         // And it is the frame parameters' default too.
         let st = large.render;
-        assert_eq!(large.frame_params(&st, 1, 0).flags, (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
-    }
-
-    #[test]
-    fn a_light_beside_a_wall_keeps_the_glow_lobe_up_to_a_larger_extent() {
-        // The default light hangs 0.15 (one radius) below the ceiling.
-        let default = Scene::default_scene();
-        assert!((light_clearance(&default) - 1.0).abs() < 1e-4, "{}", light_clearance(&default));
-        // Radius 0.3, 0.15 below the ceiling: half a radius, extent 0.032.
-        let medium = with_light(0.3, Vec3::new(0.0, 1.55, 0.0));
-        assert!((light_clearance(&medium) - 0.5).abs() < 1e-4, "{}", light_clearance(&medium));
-        let e = light_extent(&medium);
-        assert!(e > GLOW_MAX_EXTENT && e < GLOW_MAX_EXTENT_NEAR_WALL, "{e}");
-        assert_eq!(default_flags(&medium), FLAGS_DEFAULT);
-        // Radius 0.25 in the middle of the room: three radii from the floor,
-        // the ceiling and the side walls, though 0.63 radii above the large
-        // sphere: spheres do not count.
-        let centre = with_light(0.25, Vec3::new(0.0, 1.0, 0.0));
-        assert!((light_clearance(&centre) - 3.0).abs() < 1e-4, "{}", light_clearance(&centre));
-        assert_eq!(default_flags(&centre), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
-        // Radius 0.5 beside the ceiling: too large either way.
-        let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
-        assert!(light_clearance(&large) < NEAR_WALL_RADII);
-        assert_eq!(default_flags(&large), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
-        // The same light moved beside the back wall (0.1 from it) keeps
-        // the glow lobe; without walls nothing is near.
-        let wall = with_light(0.25, Vec3::new(0.0, 1.0, -0.65));
-        assert!((light_clearance(&wall) - 0.4).abs() < 1e-4, "{}", light_clearance(&wall));
-        assert_eq!(default_flags(&wall), FLAGS_DEFAULT);
-        assert_eq!(light_clearance(&Scene { walls: Vec::new(), ..centre.clone() }), f32::INFINITY);
-        // Past a wall's edge the nearest point is on the edge: a light 0.5
-        // beyond the floor's front edge (z = 1) and level with it.
-        let floor = &default.walls[0].wall;
-        let p = Vec3::new(0.0, 0.0, 1.5);
-        assert!((nearest_on_wall(floor, p) - Vec3::new(0.0, 0.0, 1.0)).length() < 1e-6);
+        assert_eq!(large.frame_params(&st, 1, 0).flags, sparse());
     }
 
     #[test]
     fn the_suites_scenes_get_the_strategies_the_suite_measured_best() {
-        // Without the glow lobe: the bright room, the lights of radius 0.25
-        // in the middle of the room and 0.5 below the ceiling; with it,
-        // every other scene of scenes/ and scenes/holdout/ but the wide
-        // light below the ceiling (extent 0.057) and the light in the open
-        // (clearance 3.2 radii, extent 0.016).
+        // The glow lobe at a tenth: the bright room, the lights of radius
+        // 0.25 in the middle of the room, 0.3 and 0.5 below the ceiling, and
+        // the three of scenes/holdout/ (extents 0.016 to 0.057); at a
+        // quarter, every other scene.
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let without = ["bright-room", "light-centre", "light-large", "light-ceiling-wide", "light-free-small"];
+        let without = [
+            "bright-room",
+            "light-centre",
+            "light-large",
+            "light-medium",
+            "light-ceiling-wide",
+            "light-free-small",
+            "light-wall-medium",
+        ];
         let mut seen = 0;
         for sub in [dir.clone(), dir.join("holdout")] {
             for entry in std::fs::read_dir(&sub).unwrap() {
@@ -278,11 +206,7 @@ mod tests {
                 }
                 let name = path.file_stem().unwrap().to_string_lossy().into_owned();
                 let scene = Scene::load(&path).unwrap();
-                let expected = if without.contains(&name.as_str()) {
-                    (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS
-                } else {
-                    FLAGS_DEFAULT
-                };
+                let expected = if without.contains(&name.as_str()) { sparse() } else { FLAGS_DEFAULT };
                 assert_eq!(default_flags(&scene), expected, "{name}");
                 seen += 1;
             }
@@ -291,7 +215,7 @@ mod tests {
     }
 
     #[test]
-    fn a_bright_room_drops_the_glow_lobe_for_mis() {
+    fn a_bright_room_takes_the_sparse_glow_lobe_and_mis() {
         let default = Scene::default_scene();
         let a = mean_albedo(&default);
         assert!(a > 0.5 && a < 0.6, "{a}");
@@ -303,7 +227,7 @@ mod tests {
             s.sphere.albedo = Vec3::splat(0.9);
         }
         assert!((mean_albedo(&bright) - 0.9).abs() < 1e-6);
-        assert_eq!(default_flags(&bright), (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_MIS);
+        assert_eq!(default_flags(&bright), sparse());
         // Area weights: one 2x2 wall of albedo 1 and one of 0 average 1/2,
         // a sphere of radius 1 (area 4 pi) against a 2x2 wall (area 4)
         // weighs pi times as much.
