@@ -6,6 +6,7 @@
 use spirv_std::glam::{Vec2, Vec3};
 
 use crate::light::{GlowLobe, LightCone};
+use crate::params::{FLAG_GLOW, FLAG_GLOW_SPARSE};
 use crate::sampling::{PI, about_axis, cosine_polar};
 
 /// Probability that BSDF sampling draws from the glow lobe instead of the
@@ -18,6 +19,21 @@ pub const GLOW_PROBABILITY: f32 = 0.25;
 /// room less. Chosen by `pathtracer bench convergence --suite` among 0.05,
 /// 0.1, 0.15 and 0.25 (docs/ARCHITECTURE.md, "Per-scene defaults").
 pub const GLOW_PROBABILITY_SPARSE: f32 = 0.1;
+
+/// The glow lobe's probability under integrator `flags`: 0 without
+/// `FLAG_GLOW`, [`GLOW_PROBABILITY_SPARSE`] with `FLAG_GLOW_SPARSE`, else
+/// [`GLOW_PROBABILITY`]. The scalar path loop and the CPU's eight lanes
+/// both take it from here.
+#[inline]
+pub fn glow_probability(flags: u32) -> f32 {
+    if flags & FLAG_GLOW == 0 {
+        0.0
+    } else if flags & FLAG_GLOW_SPARSE != 0 {
+        GLOW_PROBABILITY_SPARSE
+    } else {
+        GLOW_PROBABILITY
+    }
+}
 
 /// BSDF sampling at a diffuse vertex: the cosine lobe about the shading
 /// normal, mixed with the glow lobe around the light. One draw picks a lobe

@@ -4,13 +4,12 @@
 use spirv_std::glam::Vec3;
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
-use crate::bsdf::{GLOW_PROBABILITY, GLOW_PROBABILITY_SPARSE, Scatter};
+use crate::bsdf::{Scatter, glow_probability};
 use crate::geometry::Geometry;
 use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
 use crate::params::{
-    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
-    FLAG_SOBOL_DEEP, FrameParams,
+    FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
 };
 use crate::query::{HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
@@ -137,14 +136,7 @@ impl<S: Sampler> Path<S> {
         let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
         // After the last vertex no light found by the BSDF counts (MIS weight
         // 0), so the glow lobe could only find background there.
-        let glow = if params.flags & FLAG_GLOW == 0 || last {
-            0.0
-        } else if params.flags & FLAG_GLOW_SPARSE != 0 {
-            GLOW_PROBABILITY_SPARSE
-        } else {
-            GLOW_PROBABILITY
-        };
-        let scatter = Scatter::new(n, &cone, glow);
+        let scatter = Scatter::new(n, &cone, if last { 0.0 } else { glow_probability(params.flags) });
         // Where the whole cone is above the horizon NEE samples it by
         // projected solid angle and takes all of the light (no MIS).
         let projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);

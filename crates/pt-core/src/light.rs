@@ -87,9 +87,17 @@ impl LightCone {
         let sin2 = one_minus_cos * (2.0 - one_minus_cos);
         let sin_theta = sin2.max(0.0).sqrt();
         let dir = about_axis(self.axis, cos_theta, sin_theta, u2);
-        // Near root of |p + s dir - c| = r: s = d cos - d sqrt(sin2_max - sin2).
-        let dist = self.dist * (cos_theta - (self.sin2_max - sin2).max(0.0).sqrt());
-        (dir, dist)
+        (dir, self.near_distance(one_minus_cos))
+    }
+
+    /// The distance to the light's near surface along a direction of the
+    /// cone whose angle to the axis has `1 - cos` = `one_minus_cos`: the
+    /// near root of |p + s dir - c| = r, s = d cos - d sqrt(sin2_max -
+    /// sin2), with sin2 from the product form `x (2 - x)`.
+    #[inline]
+    fn near_distance(&self, one_minus_cos: f32) -> f32 {
+        let sin2 = one_minus_cos * (2.0 - one_minus_cos);
+        self.dist * ((1.0 - one_minus_cos) - (self.sin2_max - sin2).max(0.0).sqrt())
     }
 
     /// Whether the cone is not empty and lies wholly above the horizon of
@@ -145,13 +153,10 @@ impl LightCone {
         let y = sin_half * (r * sin_phi);
         let h = (1.0 - x * x - y * y).max(0.0).sqrt();
         let dir = t1 * x + t2 * y + n * h;
-        // As in `sample`, with 1 - cos of the angle to the axis from half
-        // the squared chord, which keeps its digits in tiny cones.
+        // 1 - cos of the angle to the axis from half the squared chord,
+        // which keeps its digits in tiny cones.
         let chord = dir - self.axis;
-        let one_minus_cos = 0.5 * chord.dot(chord);
-        let sin2 = one_minus_cos * (2.0 - one_minus_cos);
-        let dist = self.dist * (1.0 - one_minus_cos - (self.sin2_max - sin2).max(0.0).sqrt());
-        (dir, dist)
+        (dir, self.near_distance(0.5 * chord.dot(chord)))
     }
 }
 

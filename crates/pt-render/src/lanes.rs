@@ -30,14 +30,12 @@ use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use pt_core::FrameParams;
 use pt_core::accum::PixelSamples;
-use pt_core::bsdf::{GLOW_PROBABILITY, GLOW_PROBABILITY_SPARSE};
+use pt_core::bsdf::glow_probability;
 use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{
-    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
-};
+use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
@@ -627,12 +625,8 @@ impl<'a> Frame<'a> {
             nee: params.flags & FLAG_NEE != 0,
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
-            glow: params.flags & FLAG_GLOW != 0,
-            glow_probability: if params.flags & FLAG_GLOW_SPARSE != 0 {
-                GLOW_PROBABILITY_SPARSE
-            } else {
-                GLOW_PROBABILITY
-            },
+            glow: glow_probability(params.flags) > 0.0,
+            glow_probability: glow_probability(params.flags),
             luminance_rr: params.flags & FLAG_RR_LUMINANCE != 0,
             black_background: params.background.max_element() == 0.0,
         }
@@ -760,8 +754,13 @@ impl Cone {
         let sin2 = one_minus_cos * (2.0 - one_minus_cos);
         let sin_theta = sin2.max(F::splat(0.0)).sqrt();
         let dir = about_axis(self.axis, cos_theta, sin_theta, u2);
-        let dist = self.dist * (cos_theta - (self.sin2_max - sin2).max(F::splat(0.0)).sqrt());
-        (dir, dist)
+        (dir, self.near_distance(one_minus_cos))
+    }
+
+    #[inline(always)]
+    fn near_distance(&self, one_minus_cos: F) -> F {
+        let sin2 = one_minus_cos * (2.0 - one_minus_cos);
+        self.dist * ((1.0 - one_minus_cos) - (self.sin2_max - sin2).max(F::splat(0.0)).sqrt())
     }
 
     #[inline(always)]
@@ -799,10 +798,7 @@ impl Cone {
         let h = (1.0 - x * x - y * y).max(F::splat(0.0)).sqrt();
         let dir = t1.scale(x) + t2.scale(y) + n.scale(h);
         let chord = dir - self.axis;
-        let one_minus_cos = 0.5 * chord.dot(chord);
-        let sin2 = one_minus_cos * (2.0 - one_minus_cos);
-        let dist = self.dist * (1.0 - one_minus_cos - (self.sin2_max - sin2).max(F::splat(0.0)).sqrt());
-        (dir, dist)
+        (dir, self.near_distance(0.5 * chord.dot(chord)))
     }
 }
 
@@ -1039,8 +1035,13 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         if frame.nee {
             let m = live & !cone.empty;
             let (u1, u2) = self.sampler.next_2d(m);
-            let (mut dir, mut dist) = cone.sample(u1, u2);
+            // Each sampler only where a lane takes it: where the light is
+            // above every lane's horizon the uniform one is not run.
             let projected = projected & m;
+            let (mut dir, mut dist) = (V3::splat(Vec3::ZERO), F::splat(0.0));
+            if (m & !projected).any() {
+                (dir, dist) = cone.sample(u1, u2);
+            }
             if projected.any() {
                 let (p_dir, p_dist) = cone.sample_projected(n, u1, u2);
                 (dir, dist) = (selv(projected, p_dir, dir), sel(projected, p_dist, dist));
@@ -1230,7 +1231,7 @@ mod tests {
     use super::*;
     use crate::scene::{RenderSettings, Scene};
     use pt_core::integrator::render_pixel;
-    use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+    use pt_core::params::{FLAG_GLOW, FLAG_GLOW_SPARSE};
     use pt_core::{Sphere, Wall};
 
     /// The scenes the comparison runs on: the default scene; the same with
