@@ -188,7 +188,7 @@ mod tests {
         // the three of scenes/holdout/ (extents 0.016 to 0.057); at a
         // quarter, every other scene.
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let without = [
+        let tenth = [
             "bright-room",
             "light-centre",
             "light-large",
@@ -206,7 +206,7 @@ mod tests {
                 }
                 let name = path.file_stem().unwrap().to_string_lossy().into_owned();
                 let scene = Scene::load(&path).unwrap();
-                let expected = if without.contains(&name.as_str()) { sparse() } else { FLAGS_DEFAULT };
+                let expected = if tenth.contains(&name.as_str()) { sparse() } else { FLAGS_DEFAULT };
                 assert_eq!(default_flags(&scene), expected, "{name}");
                 seen += 1;
             }
