@@ -92,7 +92,7 @@ pub enum StrategyId {
     /// The cosine lobe alone, no glow lobe.
     GlowOff,
     /// The glow lobe's probability switched: a tenth where the default has
-    /// a quarter, and the other way round.
+    /// a quarter or none, a quarter where it has a tenth.
     GlowShareSwitched,
     /// 16 samples per pixel per frame.
     Spp16,
@@ -170,7 +170,7 @@ const _: () = assert!(
 pub const STRATEGIES: [Strategy; 13] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe (a quarter, a tenth around large lights), RR from 5, 64 spp/frame",
+        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe (a quarter; a tenth around large lights, none in the open), RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -226,8 +226,10 @@ pub const STRATEGIES: [Strategy; 13] = [
     },
     Strategy {
         id: StrategyId::GlowShareSwitched,
-        name: "glow lobe share switched (a tenth where the default has a quarter, else a quarter)",
-        flags: |f| f ^ FLAG_GLOW_SPARSE,
+        name: "glow lobe share switched (a tenth where the default has a quarter or none, else a quarter)",
+        // A default without the lobe keeps FLAG_GLOW_SPARSE: FLAG_GLOW
+        // alone turns the lobe on at a tenth.
+        flags: |f| if f & FLAG_GLOW == 0 { f | FLAG_GLOW } else { f ^ FLAG_GLOW_SPARSE },
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -284,14 +286,29 @@ mod tests {
         let mut large = small.clone();
         large.light.radius = 0.5;
         large.light.center.y = 1.35;
-        // The large light's default has MIS and no glow lobe (the rule in
-        // pt_render::strategy); the small light's has the glow lobe, no MIS.
+        let mut open = small.clone();
+        open.light.radius = 0.25;
+        open.light.center.y = 1.0;
+        // The large light's default has MIS and the glow lobe at a tenth,
+        // the one in the open MIS and no glow lobe (the rule in
+        // pt_render::strategy); the small light's has the glow lobe at a
+        // quarter, no MIS.
         assert_ne!(small.default_flags() & FLAG_MIS, large.default_flags() & FLAG_MIS);
         let same = |scene: &pt_render::Scene| {
             STRATEGIES.iter().filter(|s| s.same_as_default_on(scene)).map(|s| s.id).collect::<Vec<_>>()
         };
         assert_eq!(same(&small), []);
         assert_eq!(same(&large), [StrategyId::NeeMis]);
+        assert_eq!(same(&open), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        // Switching the share turns the lobe on at a tenth in the open, and
+        // swaps a quarter and a tenth elsewhere.
+        let switched = |scene: &pt_render::Scene| {
+            pt_core::bsdf::glow_probability(StrategyId::GlowShareSwitched.strategy().flags_for(scene))
+        };
+        assert_eq!(pt_core::bsdf::glow_probability(open.default_flags()), 0.0);
+        assert_eq!(switched(&open), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(switched(&large), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(switched(&small), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
     }
 
     #[test]

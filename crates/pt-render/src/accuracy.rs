@@ -411,8 +411,11 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 12] = [
+    let variants: [Variant; 13] = [
         ("the glow lobe at a tenth of the samples, with MIS", |s| s.flags |= FLAG_GLOW_SPARSE | FLAG_MIS),
+        ("the glow lobe off, with MIS (a large light in the open)", |s| {
+            s.flags = (s.flags & !FLAG_GLOW) | FLAG_GLOW_SPARSE | FLAG_MIS
+        }),
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("NEE uniform in the light's cone, not by projected solid angle", |s| s.flags &= !FLAG_NEE_PROJECTED),
         ("NEE uniform in the light's cone, with MIS", |s| s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_MIS),
