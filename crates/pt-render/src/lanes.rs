@@ -609,6 +609,7 @@ impl<'a> Frame<'a> {
         let (walls, spheres) = pt_core::query::counts(params);
         // The scalar loop's mask, as a list the shadow test runs through.
         let mask = ShadowWalls::new(params, geometry);
+        let glow = glow_probability(params.flags);
         let mut shadow_walls = [0; MAX_WALLS];
         let mut shadow_wall_count = 0;
         for i in (0..walls).filter(|&i| mask.contains(i)) {
@@ -625,8 +626,8 @@ impl<'a> Frame<'a> {
             nee: params.flags & FLAG_NEE != 0,
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
-            glow: glow_probability(params.flags) > 0.0,
-            glow_probability: glow_probability(params.flags),
+            glow: glow > 0.0,
+            glow_probability: glow,
             luminance_rr: params.flags & FLAG_RR_LUMINANCE != 0,
             black_background: params.background.max_element() == 0.0,
         }
