@@ -185,10 +185,22 @@ fn set_geometry_renders_the_new_scene() {
     assert_ne!(means(&got), means(&render_gpu(&ctx, &before, &settings, 8, 7)));
 }
 
-/// A frame of the default scene with the trace kernel `kernel`.
+/// A frame of `scene` with the trace kernel `kernel`.
 fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) -> (TraceKernel, Vec<[f32; 3]>) {
+    let flags = scene.frame_params(&scene.render, 4, 11).flags;
+    render_with_flags(ctx, scene, kernel, flags)
+}
+
+/// A frame of `scene` with the trace kernel `kernel` and integrator `flags`.
+fn render_with_flags(
+    ctx: &pt_render::GpuContext,
+    scene: &Scene,
+    kernel: TraceKernel,
+    flags: u32,
+) -> (TraceKernel, Vec<[f32; 3]>) {
     let settings = RenderSettings { width: 37, height: 23, spp: 4, ..scene.render };
-    let params = scene.frame_params(&settings, 4, 11);
+    let mut params = scene.frame_params(&settings, 4, 11);
+    params.flags = flags;
     let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
     r.set_trace_kernel(ctx, kernel);
     let used = r.trace_kernel();
@@ -196,34 +208,43 @@ fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) 
     (used, means(&r.read_accum(ctx).unwrap()))
 }
 
-/// Both small-scene kernels (lavapipe's default) render what the general
-/// kernel renders, seed for seed: the same tests in the same order on a
-/// copy of the same numbers. The default scene runs on the 5-wall,
+/// Both small-scene kernels (lavapipe's default), each with each of the
+/// three samplers compiled in, render what the general kernel renders
+/// with the same flags, seed for seed: the same tests in the same order on
+/// a copy of the same numbers. The default scene runs on the 5-wall,
 /// 2-sphere kernel, the scene with a third sphere on the 8-wall, 4-sphere
 /// one. On lavapipe that is bit for bit; another driver may fuse
 /// multiply-adds differently in each, so elsewhere all but a few pixels
-/// (paths that diverge) must agree to 1e-4.
+/// (paths that diverge) must agree to 1e-4. The three samplers' images
+/// differ: each flag setting reaches its own entry point.
 #[test]
 fn small_scene_kernels_render_what_the_general_kernel_renders() {
+    use pt_core::params::{FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
     let ctx = gpu();
     let mut three_spheres = Scene::default_scene();
     let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
     three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    let samplers = [FLAGS_DEFAULT & !FLAG_SOBOL, FLAGS_DEFAULT, FLAGS_DEFAULT | FLAG_SOBOL_DEEP];
     for scene in [Scene::default_scene(), three_spheres] {
-        let (used, general) = render_with(&ctx, &scene, TraceKernel::General);
-        assert_eq!(used, TraceKernel::General);
-        let (used, small) = render_with(&ctx, &scene, TraceKernel::SmallScene);
-        assert_eq!(used, TraceKernel::SmallScene, "the scene fits");
-        assert!(general.iter().any(|p| p[0] > 0.0), "a black image proves nothing");
-        if ctx.is_software() {
-            assert_eq!(small, general);
-        } else {
-            let close = small
-                .iter()
-                .zip(&general)
-                .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4 * (1.0 + b[k].abs())))
-                .count();
-            assert!(close * 100 >= general.len() * 98, "only {close} of {} pixels match", general.len());
+        let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
+        for flags in samplers {
+            let (used, general) = render_with_flags(&ctx, &scene, TraceKernel::General, flags);
+            assert_eq!(used, TraceKernel::General);
+            let (used, small) = render_with_flags(&ctx, &scene, TraceKernel::SmallScene, flags);
+            assert_eq!(used, TraceKernel::SmallScene, "the scene fits");
+            assert!(general.iter().any(|p| p[0] > 0.0), "a black image proves nothing");
+            if ctx.is_software() {
+                assert_eq!(small, general, "flags {flags:#x}");
+            } else {
+                let close = small
+                    .iter()
+                    .zip(&general)
+                    .filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4 * (1.0 + b[k].abs())))
+                    .count();
+                assert!(close * 100 >= general.len() * 98, "only {close} of {} pixels match", general.len());
+            }
+            assert!(images.iter().all(|other| *other != small), "flags {flags:#x} drew another sampler's numbers");
+            images.push(small);
         }
     }
 }

@@ -213,14 +213,52 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 
 /// [`render_pixel`] on a copy of the scene read at constant indices
 /// ([`SmallScene`] of capacity `W` walls and `S` spheres), for a scene that
-/// [`SmallScene::fits`]: the same samples, faster on lavapipe.
-pub fn render_pixel_small<const W: u32, const S: u32>(
+/// [`SmallScene::fits`], with the sampler `Smp` fixed at compile time: it
+/// must be the one the flags pick ([`SamplerKind::of`]). The same samples
+/// as [`render_pixel`], faster on lavapipe.
+///
+/// lavapipe runs both sides of every branch, masked, and a loop at least
+/// once: [`render_pixel`]'s choice among three samplers, each with its own
+/// path loop, would run all three loops' set-up and one pass of each loop
+/// body in every invocation (about 3.5 ms per frame at 128x128).
+pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
-    pixel(x, y, params, geometry, &SmallScene::<W, S>::new(params, geometry), &mut NoRayCount)
+    let scene = SmallScene::<W, S>::new(params, geometry);
+    pixel_samples::<Smp, _, _>(x, y, params, geometry, &scene, &mut NoRayCount)
+}
+
+/// The three samplers the path loop can draw from, as the flags pick them:
+/// the kernel's small-scene entry points come in one form per sampler.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum SamplerKind {
+    /// Independent PCG numbers ([`Rng`]): no `FLAG_SOBOL`.
+    Independent,
+    /// Sobol points for the first draws, then PCG ([`SobolSampler`]):
+    /// `FLAG_SOBOL`.
+    Sobol,
+    /// Sobol points for every draw: `FLAG_SOBOL | FLAG_SOBOL_DEEP`.
+    SobolDeep,
+}
+
+impl SamplerKind {
+    /// Every kind, in the order of the kernel's entry points.
+    pub const ALL: [SamplerKind; 3] = [SamplerKind::Independent, SamplerKind::Sobol, SamplerKind::SobolDeep];
+
+    /// The sampler that integrator `flags` pick.
+    pub fn of(flags: u32) -> Self {
+        if flags & FLAG_SOBOL == 0 {
+            SamplerKind::Independent
+        } else if flags & FLAG_SOBOL_DEEP == 0 {
+            SamplerKind::Sobol
+        } else {
+            SamplerKind::SobolDeep
+        }
+    }
 }
 
 /// [`render_pixel`] with its rays counted: the one place that picks the

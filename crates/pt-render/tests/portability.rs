@@ -40,13 +40,21 @@ fn entry_points(module: &Module) -> Vec<(ShaderStage, String)> {
             "accumulate_16x4_groups",
             "accumulate_32x2_groups",
             "accumulate_4x4_groups",
-            "accumulate_small_5w_2s",
-            "accumulate_small_8w_4s",
+            "accumulate_small_5w_2s_pcg",
+            "accumulate_small_5w_2s_sobol",
+            "accumulate_small_5w_2s_sobol_deep",
+            "accumulate_small_8w_4s_pcg",
+            "accumulate_small_8w_4s_sobol",
+            "accumulate_small_8w_4s_sobol_deep",
             "blit_fs",
             "blit_vs",
             "display"
         ]
     );
+    // The names the GPU renderer builds for its small-scene pipelines.
+    for entry in pt_render::gpu::small_scene_entries() {
+        assert!(names.contains(&entry.as_str()), "{entry} is not in the kernel");
+    }
     eps
 }
 

@@ -11,6 +11,8 @@
 #![cfg_attr(target_arch = "spirv", no_std)]
 
 use pt_core::glam::{UVec3, Vec2, Vec4};
+use pt_core::rng::Rng;
+use pt_core::sampler::{Sampler, SobolSampler};
 use pt_core::{AccumPixel, FrameParams, Geometry, PixelSamples, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
@@ -21,8 +23,8 @@ use spirv_std::spirv;
 /// the non-finite samples it discarded. The `accumulate*` entry
 /// points differ only in their workgroup shape (`pathtracer bench`
 /// compares them); `accumulate` (8 x 8) is the default. The
-/// `accumulate_small_*` entry points trace a copy of a small scene
-/// (`render` is then [`small`]).
+/// `accumulate_small_*` entry points trace a copy of a small scene with one
+/// sampler each (`render` is then [`small`]).
 fn accumulate_pixel(
     id: UVec3,
     params: &FrameParams,
@@ -53,12 +55,17 @@ fn accumulate_pixel(
 }
 
 /// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
-/// `S` spheres, with the parameters copied into the invocation's own memory
-/// too: lavapipe would otherwise gather each of them from the buffer at
-/// every read.
-fn small<const W: u32, const S: u32>(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
+/// `S` spheres with sampler `Smp`, with the parameters copied into the
+/// invocation's own memory too: lavapipe would otherwise gather each of
+/// them from the buffer at every read.
+fn small<Smp: Sampler, const W: u32, const S: u32>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    geometry: &Geometry,
+) -> PixelSamples {
     let params = *params;
-    integrator::render_pixel_small::<W, S>(x, y, &params, geometry)
+    integrator::render_pixel_small::<Smp, W, S>(x, y, &params, geometry)
 }
 
 macro_rules! accumulate_entry {
@@ -90,9 +97,14 @@ accumulate_entry!(accumulate_16x4_groups, 16, 4);
 accumulate_entry!(accumulate_32x2_groups, 32, 2);
 accumulate_entry!(accumulate_4x4_groups, 4, 4);
 // For scenes that `SmallScene::fits`, one per capacity in
-// `small_scene::SMALL_SCENE_SIZES`: the renderer's choice on lavapipe.
-accumulate_entry!(accumulate_small_5w_2s, 8, 8, small::<5, 2>);
-accumulate_entry!(accumulate_small_8w_4s, 8, 8, small::<8, 4>);
+// `small_scene::SMALL_SCENE_SIZES` and sampler (`integrator::SamplerKind`,
+// in its order): the renderer's choice on lavapipe.
+accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2>);
+accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2>);
+accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4>);
+accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4>);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB
 /// (pixel `id` of the tile).

@@ -3,10 +3,8 @@
 
 use std::sync::{Arc, Mutex, OnceLock};
 
-use pt_core::small_scene::SMALL_SCENE_SIZES;
-
 use super::GpuError;
-use super::kernel::{Kernel, compute_pipeline, small_scene_entry};
+use super::kernel::{Kernel, compute_pipeline, small_scene_entries};
 
 /// A device and queue on the best adapter available, with its description.
 pub struct GpuContext {
@@ -21,8 +19,8 @@ pub struct GpuContext {
     failure: Arc<Mutex<Option<String>>>,
     /// The kernel's pipelines, compiled on first use.
     kernel: OnceLock<Kernel>,
-    /// The small-scene kernels, one per entry of `SMALL_SCENE_SIZES`,
-    /// compiled on first use.
+    /// The small-scene kernels, one per entry of `SMALL_SCENE_SIZES` and
+    /// sampler (`kernel::small_scene_entries`), compiled on first use.
     small_kernels: OnceLock<Vec<wgpu::ComputePipeline>>,
 }
 
@@ -110,11 +108,9 @@ impl GpuContext {
     pub(super) fn small_kernels(&self) -> &[wgpu::ComputePipeline] {
         self.small_kernels.get_or_init(|| {
             let k = self.kernel();
-            SMALL_SCENE_SIZES
+            small_scene_entries()
                 .iter()
-                .map(|&size| {
-                    compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, &small_scene_entry(size))
-                })
+                .map(|entry| compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, entry))
                 .collect()
         })
     }

@@ -1,6 +1,8 @@
 //! The kernel module and its compute pipelines.
 
 use pt_core::Geometry;
+use pt_core::integrator::SamplerKind;
+use pt_core::small_scene::SMALL_SCENE_SIZES;
 
 use super::KERNEL_SPV;
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, bind_group_layout, storage_entry, uniform_entry};
@@ -27,7 +29,8 @@ pub enum TraceKernel {
     General,
     /// `accumulate_small_*`: a copy of a small scene read at constant
     /// indices (`pt_core::small_scene`), in the smallest capacity that holds
-    /// the scene; frames of scenes that fit none use `General`. The default
+    /// the scene, with the sampler the flags pick compiled in; frames of
+    /// scenes that fit none use `General`. The default
     /// on CPU adapters (lavapipe), where it measured faster
     /// (docs/ARCHITECTURE.md).
     SmallScene,
@@ -43,9 +46,30 @@ impl TraceKernel {
     }
 }
 
-/// The entry point of the small-scene kernel of capacity (walls, spheres).
-pub(super) fn small_scene_entry((walls, spheres): (u32, u32)) -> String {
-    format!("accumulate_small_{walls}w_{spheres}s")
+/// The entry point of the small-scene kernel of capacity (walls, spheres)
+/// with `sampler`.
+pub(super) fn small_scene_entry((walls, spheres): (u32, u32), sampler: SamplerKind) -> String {
+    let sampler = match sampler {
+        SamplerKind::Independent => "pcg",
+        SamplerKind::Sobol => "sobol",
+        SamplerKind::SobolDeep => "sobol_deep",
+    };
+    format!("accumulate_small_{walls}w_{spheres}s_{sampler}")
+}
+
+/// Index of the small-scene pipeline of capacity `size` (an index in
+/// `SMALL_SCENE_SIZES`) and `sampler` in [`small_scene_entries`]' order.
+pub(super) fn small_scene_index(size: usize, sampler: SamplerKind) -> usize {
+    size * SamplerKind::ALL.len() + SamplerKind::ALL.iter().position(|&k| k == sampler).unwrap_or(0)
+}
+
+/// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
+/// each with every sampler in `SamplerKind::ALL`'s order.
+pub fn small_scene_entries() -> Vec<String> {
+    SMALL_SCENE_SIZES
+        .iter()
+        .flat_map(|&size| SamplerKind::ALL.iter().map(move |&k| small_scene_entry(size, k)))
+        .collect()
 }
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:

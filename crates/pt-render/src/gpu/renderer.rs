@@ -1,12 +1,13 @@
 //! The progressive GPU renderer for one scene and image tile.
 
+use pt_core::integrator::SamplerKind;
 use pt_core::small_scene::smallest_fit;
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
 use super::context::PendingRead;
-use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline};
+use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index};
 use super::{GpuContext, GpuError, GpuTimer};
 
 /// The progressive GPU renderer for one scene and one tile of its image
@@ -29,8 +30,8 @@ pub struct GpuRenderer {
     params: FrameParams,
     /// The geometry block's contents, for `small_scene::smallest_fit`.
     geometry: Box<Geometry>,
-    /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES`),
-    /// where they are chosen.
+    /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES` and
+    /// sampler, `kernel::small_scene_entries`), where they are chosen.
     accumulate_small: Option<Vec<wgpu::ComputePipeline>>,
     /// `smallest_fit` of the current scene and light: worked out when they
     /// change, not every frame.
@@ -267,7 +268,8 @@ impl GpuRenderer {
     /// small-scene kernel is chosen, the smallest capacity that holds the
     /// scene.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
-        self.accumulate_small.as_ref()?.get(self.small_fit?)
+        let index = small_scene_index(self.small_fit?, SamplerKind::of(self.params.flags));
+        self.accumulate_small.as_ref()?.get(index)
     }
 
     /// The kernel the next frame runs: the small-scene kernel where it is
