@@ -6,7 +6,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1; then
+# Either folder may hold the drivers' manifests (`ls` of both fails when one
+# is empty, so each is asked on its own).
+if ! compgen -G '/usr/share/vulkan/icd.d/*.json' >/dev/null && ! compgen -G '/etc/vulkan/icd.d/*.json' >/dev/null; then
     echo "no Vulkan driver found: installing Mesa's lavapipe (mesa-vulkan-drivers)" >&2
     sudo=""
     [ "$(id -u)" = 0 ] || sudo="sudo"
