@@ -220,7 +220,8 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 /// lavapipe runs both sides of every branch, masked, and a loop at least
 /// once: [`render_pixel`]'s choice among three samplers, each with its own
 /// path loop, would run all three loops' set-up and one pass of each loop
-/// body in every invocation (about 3.5 ms per frame at 128x128).
+/// body in every invocation (docs/ARCHITECTURE.md, "The small-scene
+/// kernel").
 pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32>(
     x: u32,
     y: u32,
@@ -246,7 +247,8 @@ pub enum SamplerKind {
 }
 
 impl SamplerKind {
-    /// Every kind, in the order of the kernel's entry points.
+    /// Every kind, in the order of their discriminants (`kind as usize`
+    /// indexes it) and of the kernel's entry points.
     pub const ALL: [SamplerKind; 3] = [SamplerKind::Independent, SamplerKind::Sobol, SamplerKind::SobolDeep];
 
     /// The sampler that integrator `flags` pick.
@@ -321,4 +323,24 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter>(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The kind the flags pick is the sampler `pixel` instantiates for
+    /// them (`FLAG_SOBOL_DEEP` means nothing without `FLAG_SOBOL`), and
+    /// `ALL` lists the kinds in the order of their discriminants.
+    #[test]
+    fn sampler_kind_follows_the_flags() {
+        assert_eq!(SamplerKind::of(0), SamplerKind::Independent);
+        assert_eq!(SamplerKind::of(FLAG_SOBOL_DEEP), SamplerKind::Independent);
+        assert_eq!(SamplerKind::of(FLAG_SOBOL), SamplerKind::Sobol);
+        assert_eq!(SamplerKind::of(FLAG_SOBOL | FLAG_SOBOL_DEEP), SamplerKind::SobolDeep);
+        assert_eq!(SamplerKind::of(crate::params::FLAGS_DEFAULT), SamplerKind::Sobol);
+        for (i, kind) in SamplerKind::ALL.into_iter().enumerate() {
+            assert_eq!(kind as usize, i);
+        }
+    }
 }

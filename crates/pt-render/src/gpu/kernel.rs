@@ -60,7 +60,7 @@ pub(super) fn small_scene_entry((walls, spheres): (u32, u32), sampler: SamplerKi
 /// Index of the small-scene pipeline of capacity `size` (an index in
 /// `SMALL_SCENE_SIZES`) and `sampler` in [`small_scene_entries`]' order.
 pub(super) fn small_scene_index(size: usize, sampler: SamplerKind) -> usize {
-    size * SamplerKind::ALL.len() + SamplerKind::ALL.iter().position(|&k| k == sampler).unwrap_or(0)
+    size * SamplerKind::ALL.len() + sampler as usize
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
@@ -140,4 +140,24 @@ pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
     // checks and has no unbounded loop, which is what the unchecked
     // options ask of the caller.
     unsafe { device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The renderer's index of a (capacity, sampler) pair finds that
+    /// pair's entry point among the pipelines made in
+    /// `small_scene_entries`' order, for every pair.
+    #[test]
+    fn small_scene_index_finds_its_entry_point() {
+        let entries = small_scene_entries();
+        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * SamplerKind::ALL.len());
+        for (i, &size) in SMALL_SCENE_SIZES.iter().enumerate() {
+            for k in SamplerKind::ALL {
+                assert_eq!(entries[small_scene_index(i, k)], small_scene_entry(size, k));
+            }
+        }
+        assert_eq!(small_scene_entry((5, 2), SamplerKind::SobolDeep), "accumulate_small_5w_2s_sobol_deep");
+    }
 }
