@@ -187,8 +187,7 @@ fn set_geometry_renders_the_new_scene() {
 
 /// A frame of `scene` with the trace kernel `kernel`.
 fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) -> (TraceKernel, Vec<[f32; 3]>) {
-    let flags = scene.frame_params(&scene.render, 4, 11).flags;
-    render_with_flags(ctx, scene, kernel, flags)
+    render_with_flags(ctx, scene, kernel, scene.default_flags())
 }
 
 /// A frame of `scene` with the trace kernel `kernel` and integrator `flags`.

@@ -263,8 +263,8 @@ impl SamplerKind {
     }
 }
 
-/// [`render_pixel`] with its rays counted: the one place that picks the
-/// sampler.
+/// [`render_pixel`] with its rays counted, with the sampler the flags pick
+/// ([`SamplerKind::of`], which the small-scene kernels' host also asks).
 pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     x: u32,
     y: u32,
@@ -273,14 +273,12 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     scene: &V,
     rays: &mut C,
 ) -> PixelSamples {
-    if params.flags & FLAG_SOBOL != 0 {
-        if params.flags & FLAG_SOBOL_DEEP != 0 {
+    match SamplerKind::of(params.flags) {
+        SamplerKind::Independent => pixel_samples::<Rng, V, C>(x, y, params, geometry, scene, rays),
+        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C>(x, y, params, geometry, scene, rays),
+        SamplerKind::SobolDeep => {
             pixel_samples::<SobolSampler<{ u32::MAX }>, V, C>(x, y, params, geometry, scene, rays)
-        } else {
-            pixel_samples::<SobolSampler, V, C>(x, y, params, geometry, scene, rays)
         }
-    } else {
-        pixel_samples::<Rng, V, C>(x, y, params, geometry, scene, rays)
     }
 }
 
@@ -329,9 +327,9 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter>(
 mod tests {
     use super::*;
 
-    /// The kind the flags pick is the sampler `pixel` instantiates for
-    /// them (`FLAG_SOBOL_DEEP` means nothing without `FLAG_SOBOL`), and
-    /// `ALL` lists the kinds in the order of their discriminants.
+    /// The kind the flags pick (`FLAG_SOBOL_DEEP` means nothing without
+    /// `FLAG_SOBOL`), and `ALL` lists the kinds in the order of their
+    /// discriminants.
     #[test]
     fn sampler_kind_follows_the_flags() {
         assert_eq!(SamplerKind::of(0), SamplerKind::Independent);
