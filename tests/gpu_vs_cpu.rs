@@ -187,7 +187,7 @@ fn set_geometry_renders_the_new_scene() {
 
 /// A frame of `scene` with the trace kernel `kernel`.
 fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) -> (TraceKernel, Vec<[f32; 3]>) {
-    render_with_flags(ctx, scene, kernel, scene.default_flags())
+    render_with_flags(ctx, scene, kernel, scene.default_flags(pt_render::strategy::Backend::Gpu))
 }
 
 /// A frame of `scene` with the trace kernel `kernel` and integrator `flags`.

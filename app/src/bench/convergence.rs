@@ -92,7 +92,7 @@ pub(crate) fn curve(
     until: Until,
 ) -> Result<Vec<Point>> {
     let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
-    params.flags = strategy.flags_for(scene);
+    params.flags = strategy.flags_for(scene, device.backend());
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut r = Renderer::new(device, params, &walls, &spheres)?;

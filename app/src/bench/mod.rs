@@ -20,9 +20,11 @@ pub use report::*;
 pub use throughput::*;
 
 use pt_core::params::{
-    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
+    FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
+use pt_render::strategy::{Backend, with_connections};
 
 /// Which backend a measurement ran on.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -91,8 +93,9 @@ pub enum StrategyId {
     BsdfOnly,
     /// The cosine lobe alone, no glow lobe.
     GlowOff,
-    /// The glow lobe's probability switched: a tenth where the default has
-    /// a quarter or none, a quarter where it has a tenth.
+    /// The glow lobe switched: on at the light's share (a quarter, a tenth
+    /// around large lights) where the default has none, else a quarter and
+    /// a tenth swapped.
     GlowShareSwitched,
     /// 16 samples per pixel per frame.
     Spp16,
@@ -103,6 +106,10 @@ pub enum StrategyId {
     /// NEE uniform in the light's cone everywhere, never by projected
     /// solid angle.
     NeeUniform,
+    /// Connections through lit wall points switched: off (the glow lobe at
+    /// the light's share instead) where the default has them, on (in the
+    /// lobe's place) where it has not.
+    ConnectionsSwitched,
 }
 
 impl StrategyId {
@@ -133,19 +140,20 @@ pub struct Strategy {
 }
 
 impl Strategy {
-    /// Its integrator flags on `scene`: the scene's own default ones
-    /// ([`pt_render::Scene::default_flags`]) with this strategy's change.
-    pub fn flags_for(&self, scene: &pt_render::Scene) -> u32 {
-        (self.flags)(scene.default_flags())
+    /// Its integrator flags on `scene` and `backend`: the scene's own
+    /// default ones there ([`pt_render::Scene::default_flags`]) with this
+    /// strategy's change.
+    pub fn flags_for(&self, scene: &pt_render::Scene, backend: Backend) -> u32 {
+        (self.flags)(scene.default_flags(backend))
     }
 
     /// Whether this strategy, not the default itself, renders `scene` just
     /// as the default does (NEE with MIS where the scene's default has
     /// MIS): timing it again would measure only the machine's noise.
-    pub fn same_as_default_on(&self, scene: &pt_render::Scene) -> bool {
+    pub fn same_as_default_on(&self, scene: &pt_render::Scene, backend: Backend) -> bool {
         let d = StrategyId::Default.strategy();
         self.id != StrategyId::Default
-            && self.flags_for(scene) == d.flags_for(scene)
+            && self.flags_for(scene, backend) == d.flags_for(scene, backend)
             && (self.rr_start, self.spp_per_frame) == (d.rr_start, d.spp_per_frame)
     }
 }
@@ -167,10 +175,10 @@ const _: () = assert!(
 /// The strategies compared; the first is the default configuration (the
 /// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
 /// each other changes one thing from it on the same scene.
-pub const STRATEGIES: [Strategy; 13] = [
+pub const STRATEGIES: [Strategy; 14] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), glow lobe (a quarter; a tenth around large lights, none in the open), RR from 5, 64 spp/frame",
+        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), connections through lit wall points (on the CPU around small lights only; else the glow lobe: a quarter, a tenth around large lights, none in the open), RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -226,7 +234,7 @@ pub const STRATEGIES: [Strategy; 13] = [
     },
     Strategy {
         id: StrategyId::GlowShareSwitched,
-        name: "glow lobe share switched (a tenth where the default has a quarter or none, else a quarter)",
+        name: "glow lobe switched (on at the light's share where the default has none; else a quarter and a tenth swapped)",
         // A default without the lobe keeps FLAG_GLOW_SPARSE: FLAG_GLOW
         // alone turns the lobe on at a tenth.
         flags: |f| if f & FLAG_GLOW == 0 { f | FLAG_GLOW } else { f ^ FLAG_GLOW_SPARSE },
@@ -252,6 +260,13 @@ pub const STRATEGIES: [Strategy; 13] = [
         id: StrategyId::NeeUniform,
         name: "NEE uniform in the light's cone (no projected solid angle)",
         flags: |f| f & !FLAG_NEE_PROJECTED,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::ConnectionsSwitched,
+        name: "connections switched (off, with the glow lobe at the light's share, where the default has them; else on, in the lobe's place)",
+        flags: |f| if f & FLAG_CONNECT != 0 { (f & !FLAG_CONNECT) | FLAG_GLOW } else { with_connections(f) },
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -289,26 +304,39 @@ mod tests {
         let mut open = small.clone();
         open.light.radius = 0.25;
         open.light.center.y = 1.0;
-        // The large light's default has MIS and the glow lobe at a tenth,
-        // the one in the open MIS and no glow lobe (the rule in
-        // pt_render::strategy); the small light's has the glow lobe at a
-        // quarter, no MIS.
-        assert_ne!(small.default_flags() & FLAG_MIS, large.default_flags() & FLAG_MIS);
-        let same = |scene: &pt_render::Scene| {
-            STRATEGIES.iter().filter(|s| s.same_as_default_on(scene)).map(|s| s.id).collect::<Vec<_>>()
+        // The small light's default has connections on both backends; the
+        // large and open lights' have them on a GPU, and on the CPU the
+        // glow lobe at a tenth and none (the rule in pt_render::strategy);
+        // all but the small light's have MIS.
+        let (gpu, cpu) = (Backend::Gpu, Backend::Cpu);
+        assert_ne!(small.default_flags(gpu) & FLAG_MIS, large.default_flags(gpu) & FLAG_MIS);
+        assert_ne!(large.default_flags(gpu) & FLAG_CONNECT, large.default_flags(cpu) & FLAG_CONNECT);
+        let same = |scene: &pt_render::Scene, backend| {
+            STRATEGIES.iter().filter(|s| s.same_as_default_on(scene, backend)).map(|s| s.id).collect::<Vec<_>>()
         };
-        assert_eq!(same(&small), []);
-        assert_eq!(same(&large), [StrategyId::NeeMis]);
-        assert_eq!(same(&open), [StrategyId::NeeMis, StrategyId::GlowOff]);
-        // Switching the share turns the lobe on at a tenth in the open, and
-        // swaps a quarter and a tenth elsewhere.
-        let switched = |scene: &pt_render::Scene| {
-            pt_core::bsdf::glow_probability(StrategyId::GlowShareSwitched.strategy().flags_for(scene))
+        for backend in [gpu, cpu] {
+            assert_eq!(same(&small, backend), [StrategyId::GlowOff]);
+            assert_eq!(same(&open, backend), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        }
+        assert_eq!(same(&large, gpu), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        assert_eq!(same(&large, cpu), [StrategyId::NeeMis]);
+        // Switching the share turns the lobe on at the light's share where
+        // the default has none, and swaps a quarter and a tenth elsewhere.
+        let switched = |scene: &pt_render::Scene, backend| {
+            pt_core::bsdf::glow_probability(StrategyId::GlowShareSwitched.strategy().flags_for(scene, backend))
         };
-        assert_eq!(pt_core::bsdf::glow_probability(open.default_flags()), 0.0);
-        assert_eq!(switched(&open), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
-        assert_eq!(switched(&large), pt_core::bsdf::GLOW_PROBABILITY);
-        assert_eq!(switched(&small), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(pt_core::bsdf::glow_probability(open.default_flags(cpu)), 0.0);
+        assert_eq!(switched(&open, cpu), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(switched(&large, cpu), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(switched(&large, gpu), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(switched(&small, gpu), pt_core::bsdf::GLOW_PROBABILITY);
+        // Switching the connections gives the glow-lobe rule where the
+        // default has them, and them where it has not.
+        let connections =
+            |scene: &pt_render::Scene, backend| StrategyId::ConnectionsSwitched.strategy().flags_for(scene, backend);
+        assert_eq!(connections(&small, cpu), pt_core::params::FLAGS_DEFAULT);
+        assert_eq!(connections(&large, gpu), large.default_flags(cpu));
+        assert_eq!(connections(&large, cpu), large.default_flags(gpu));
     }
 
     #[test]

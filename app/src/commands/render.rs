@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use pt_render::output::{self, OutputFormat};
 use pt_render::parts;
 use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
+use pt_render::strategy::Backend;
 use pt_render::{Device, GpuContext, RenderSettings};
 
 use super::{load_scene, spp_progress_bar};
@@ -46,10 +47,6 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
     };
     let tonemap = args.tonemap.code();
     let mut params = scene.frame_params(&settings, args.spp_per_frame, args.seed);
-    match args.sampler {
-        SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
-        SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
-    }
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let samples = match split {
         Some((part, parts)) => parts::part_samples(settings.spp, args.spp_per_frame, part, parts),
@@ -75,6 +72,14 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         },
     };
     let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
+    // The default strategy is the backend's own, except in a split render:
+    // its parts must render alike on whatever machines they run, GPU or
+    // CPU, to make one image, so they all take the GPU's.
+    params.flags = scene.default_flags(if split.is_some() { Backend::Gpu } else { device.backend() });
+    match args.sampler {
+        SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
+        SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,
+    }
     let display = (format == OutputFormat::Png).then_some((args.exposure, tonemap));
     let render = |device: Device<'_>| -> Result<TiledRender> {
         let tiles = device_tiles(device, settings.width, settings.height);

@@ -1,6 +1,9 @@
 //! The path loop: closest hits, next-event estimation with MIS, Russian
 //! roulette, and the per-pixel sample loop that the kernel wraps.
 
+#[cfg(target_arch = "spirv")]
+use spirv_std::num_traits::Float;
+
 use spirv_std::glam::Vec3;
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
@@ -9,13 +12,13 @@ use crate::geometry::Geometry;
 use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
 use crate::params::{
-    FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
+    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
 };
 use crate::query::{HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
-use crate::sampling::{PI, power_heuristic};
+use crate::sampling::{PI, power_heuristic, sin_cos_of_turn};
 use crate::small_scene::SmallScene;
 
 /// Minimum Russian roulette survival probability: a path is never killed
@@ -46,6 +49,13 @@ pub struct Path<S> {
     /// ray's direction (solid angle), for the MIS weight of a light hit.
     bsdf_pdf: f32,
     nee_pdf: f32,
+    /// Density (solid angle) of the BSDF sample that made the current ray,
+    /// whatever NEE did: the connection MIS weight needs it.
+    scatter_pdf: f32,
+    /// The share of the light reached from the current ray's origin vertex
+    /// (by NEE or by a BSDF ray) that this path counts: below 1 where a
+    /// connection from the vertex before could have found that vertex.
+    direct_weight: f32,
     sampler: S,
 }
 
@@ -68,6 +78,8 @@ impl<S: Sampler> Path<S> {
             skip_wall: NO_WALL,
             bsdf_pdf: 0.0,
             nee_pdf: 0.0,
+            scatter_pdf: 0.0,
+            direct_weight: 1.0,
         }
     }
 
@@ -108,7 +120,7 @@ impl<S: Sampler> Path<S> {
                     // NEE alone accounts for light reached after a bounce.
                     0.0
                 };
-                self.radiance += self.throughput * light.radiance * weight;
+                self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
             }
             return true;
         }
@@ -122,6 +134,24 @@ impl<S: Sampler> Path<S> {
         // camera inside a sphere sees its inside.
         let n = if normal.dot(ray.dir) < 0.0 { normal } else { -normal };
         let origin = offset_origin(p, n, surface.magnitude);
+        let connect = nee && params.flags & FLAG_CONNECT != 0 && shadow_walls.is_empty();
+        // The share of this vertex's direct light this path counts: the
+        // rest belongs to the connection from the vertex before, which
+        // could have chosen this wall point.
+        self.direct_weight = if connect && self.bounces > 0 && wall_index != NO_WALL {
+            let to_light = light.center - p;
+            let d2 = to_light.dot(to_light);
+            let cos_light = n.dot(to_light);
+            if cos_light > 0.0 {
+                let cos_in = -n.dot(ray.dir);
+                let bsdf_area = self.scatter_pdf * cos_in / (hit.t * hit.t);
+                power_heuristic(bsdf_area, connection_pdf(cos_light / d2.sqrt(), d2))
+            } else {
+                1.0
+            }
+        } else {
+            1.0
+        };
 
         // Next-event estimation: one shadow ray toward the light's cone. The
         // cone is seen from the hit point itself: from the offset origin,
@@ -156,9 +186,14 @@ impl<S: Sampler> Path<S> {
                         // f cos / pdf = (albedo / pi) cos / cone_pdf
                         bsdf * weight / cone_pdf
                     };
-                    self.radiance += self.throughput * albedo * light.radiance * value;
+                    self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
                 }
             }
+        }
+        if connect && self.bounces + 1 < params.max_bounces {
+            let (u, v) = (self.sampler.next_2d(), self.sampler.next_2d());
+            let through = connection(n, origin, &scatter, u, v, params, scene, shadow_walls, rays);
+            self.radiance += self.throughput * albedo * through;
         }
 
         if last && params.background.max_element() == 0.0 {
@@ -178,6 +213,7 @@ impl<S: Sampler> Path<S> {
             return true;
         }
         self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
+        self.scatter_pdf = pdf;
         self.nee_pdf = cone_pdf;
         self.throughput *= albedo * (cos * (1.0 / PI) / pdf);
         self.bounces += 1;
@@ -202,6 +238,91 @@ impl<S: Sampler> Path<S> {
         self.skip_wall = wall_index;
         false
     }
+}
+
+/// Area density on a wall of the connection's wall points at a point that
+/// sees the light's centre at distance squared `d2`, the wall's cosine
+/// toward it `cos`: a direction uniform over the sphere about the centre,
+/// `1 / 4 pi` per steradian, and `cos / d2` steradians per unit area.
+#[inline]
+fn connection_pdf(cos: f32, d2: f32) -> f32 {
+    cos / (4.0 * PI * d2)
+}
+
+/// The connection from a vertex (normal `n` on the side the path is on,
+/// ray origin `origin`, BSDF sampling `scatter`): light that reaches the
+/// vertex after one diffuse bounce at a wall point `y`, estimated through `y`
+/// instead of through a BSDF ray. `y` is where a direction uniform about
+/// the light's centre (`u`) first meets a wall: with no wall shadowing the
+/// light the room is convex, so every wall point is reachable, with density
+/// [`connection_pdf`], highest where the light shines most. Then `y`'s
+/// direct light is one NEE sample (`v`), and the path through `y` takes
+/// its power-heuristic weight against the BSDF sample that could have found
+/// `y`. Returns the radiance over `p`'s albedo.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn connection<V: SceneView, C: RayCounter>(
+    n: Vec3,
+    origin: Vec3,
+    scatter: &Scatter,
+    u: spirv_std::glam::Vec2,
+    v: spirv_std::glam::Vec2,
+    params: &FrameParams,
+    scene: &V,
+    shadow_walls: &ShadowWalls,
+    rays: &mut C,
+) -> Vec3 {
+    let light = params.light;
+    let z = 1.0 - 2.0 * u.x;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = sin_cos_of_turn(u.y);
+    let from_light = Ray { origin: light.center, dir: Vec3::new(s * cos_phi, s * sin_phi, z) };
+    rays.ray();
+    let hit = scene.first_wall(&from_light, params);
+    if hit.kind != HitKind::Wall {
+        return Vec3::ZERO;
+    }
+    let wall = scene.surface(&hit, &from_light);
+    let y = wall.point;
+    // The wall's side toward the light.
+    let ny = if wall.normal.dot(from_light.dir) < 0.0 { wall.normal } else { -wall.normal };
+    let pdf_area = connection_pdf(-ny.dot(from_light.dir), hit.t * hit.t);
+    let to_y = y - origin;
+    let d2 = to_y.dot(to_y);
+    let dist = d2.sqrt();
+    let dir = to_y / dist;
+    let (cos_p, cos_y) = (n.dot(dir), -ny.dot(dir));
+    if !(cos_p > 0.0 && cos_y > 0.0 && pdf_area > 0.0) {
+        return Vec3::ZERO;
+    }
+    let cone = light_cone(&light, y);
+    if cone.is_empty() {
+        return Vec3::ZERO;
+    }
+    let segment = Ray { origin, dir };
+    rays.ray();
+    let hides = crate::sphere::intersect_sphere(light.center, light.radius, &segment, 0.0, dist) < dist;
+    if hides || scene.occluded(&segment, params, shadow_walls, hit.index, dist) {
+        return Vec3::ZERO;
+    }
+    let projected = params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(ny);
+    let (to_light, light_dist) = if projected { cone.sample_projected(ny, v.x, v.y) } else { cone.sample(v.x, v.y) };
+    let cos_light = ny.dot(to_light);
+    // Written so that a NaN direction also returns nothing.
+    if cos_light <= 0.0 || cos_light.is_nan() {
+        return Vec3::ZERO;
+    }
+    rays.ray();
+    let shadow = Ray { origin: offset_origin(y, ny, wall.magnitude), dir: to_light };
+    if scene.occluded(&shadow, params, shadow_walls, hit.index, light_dist) {
+        return Vec3::ZERO;
+    }
+    let direct = if projected { cone.projected_over_pi(ny) } else { cos_light * (1.0 / PI) / cone.pdf() };
+    let bsdf_area = scatter.pdf(dir) * cos_y / d2;
+    let weight = power_heuristic(pdf_area, bsdf_area);
+    // f(p) cos_p G V / pdf, with f(p) = albedo / pi (albedo applied by the caller).
+    let geometry = cos_p * cos_y / (PI * d2 * pdf_area);
+    wall.albedo * light.radiance * (direct * geometry * weight)
 }
 
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`

@@ -29,6 +29,12 @@ pub const FLAG_NEE_PROJECTED: u32 = 64;
 /// probability `bsdf::GLOW_PROBABILITY_SPARSE` (0.1) instead of
 /// `bsdf::GLOW_PROBABILITY` (0.25): for large lights and bright rooms.
 pub const FLAG_GLOW_SPARSE: u32 = 128;
+/// `flags` bit, with `FLAG_NEE`, in a room whose walls cannot shadow the
+/// light: at each vertex a second next-event estimate reaches the light
+/// through a wall point chosen as a light would light it (a direction
+/// uniform about the light's centre), combined by MIS with the BSDF ray
+/// that could find the same wall point (`integrator`, "Connections").
+pub const FLAG_CONNECT: u32 = 256;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above
 /// the horizon) and the glow lobe, on Owen-scrambled Sobol samples for the

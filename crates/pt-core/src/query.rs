@@ -283,6 +283,8 @@ pub fn surface(geometry: &Geometry, hit: &Hit, ray: &Ray) -> Surface {
 pub trait SceneView {
     /// The closest hit in (0, `t_max`): see [`closest_hit`].
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit;
+    /// The closest wall hit in (0, infinity), spheres and light ignored.
+    fn first_wall(&self, ray: &Ray, params: &FrameParams) -> Hit;
     /// Whether the shadow ray is blocked in (0, `t_max`): see [`occluded`].
     fn occluded(&self, ray: &Ray, params: &FrameParams, walls: &ShadowWalls, skip_wall: u32, t_max: f32) -> bool;
     /// The shading data of a wall or sphere hit: see [`surface`].
@@ -293,6 +295,18 @@ impl SceneView for Geometry {
     #[inline]
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
         closest_hit(ray, params, self, skip_wall, t_max)
+    }
+
+    #[inline]
+    fn first_wall(&self, ray: &Ray, params: &FrameParams) -> Hit {
+        let mut hit = Hit::none(T_FAR);
+        let (wall_count, _) = counts(params);
+        let mut i = 0;
+        while i < wall_count {
+            hit.test_wall(i, &self.walls[i as usize], ray);
+            i += 1;
+        }
+        hit
     }
 
     #[inline]

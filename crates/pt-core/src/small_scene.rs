@@ -122,6 +122,16 @@ impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
         hit
     }
 
+    fn first_wall(&self, ray: &Ray, _params: &FrameParams) -> Hit {
+        let mut hit = Hit::none(crate::query::T_FAR);
+        unrolled::<W>(|i| {
+            if i < self.wall_count {
+                hit.test_wall(i, &self.walls[i as usize], ray);
+            }
+        });
+        hit
+    }
+
     /// Spheres only: [`SmallScene::fits`] leaves no wall that can block a
     /// shadow ray.
     fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, _skip_wall: u32, t_max: f32) -> bool {

@@ -16,7 +16,7 @@ use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{
-    FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
     FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
 };
 use pt_core::rng::Rng;
@@ -26,6 +26,7 @@ use crate::gpu::GpuError;
 use crate::metrics::{mean_and_stderr, region_means};
 use crate::renderer::{Device, render_accum};
 use crate::scene::{CameraDesc, NamedSphere, NamedWall, RenderSettings, Scene};
+use crate::strategy::with_connections;
 
 /// Independent renders per Monte Carlo case.
 pub const SEEDS: u32 = 16;
@@ -411,7 +412,15 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 13] = [
+    let variants: [Variant; 17] = [
+        ("connections instead of the glow lobe (the default in a room that does not shadow the light)", |s| {
+            s.flags = with_connections(s.flags)
+        }),
+        ("connections with the glow lobe too, and MIS", |s| s.flags |= FLAG_CONNECT | FLAG_MIS),
+        ("connections with NEE uniform in the light's cone", |s| {
+            s.flags = with_connections(s.flags) & !FLAG_NEE_PROJECTED
+        }),
+        ("connections on independent samples", |s| s.flags = with_connections(s.flags) & !FLAG_SOBOL),
         ("the glow lobe at a tenth of the samples, with MIS", |s| s.flags |= FLAG_GLOW_SPARSE | FLAG_MIS),
         ("the glow lobe off, with MIS (a large light in the open)", |s| {
             s.flags = (s.flags & !FLAG_GLOW) | FLAG_GLOW_SPARSE | FLAG_MIS

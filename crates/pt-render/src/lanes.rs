@@ -35,7 +35,9 @@ use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+use pt_core::params::{
+    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
@@ -595,6 +597,9 @@ struct Frame<'a> {
     shadow_walls: [u32; MAX_WALLS],
     shadow_wall_count: usize,
     nee: bool,
+    /// Connections through lit wall points (`FLAG_CONNECT`, with NEE, where
+    /// no wall shadows the light).
+    connect: bool,
     projected: bool,
     mis: bool,
     glow: bool,
@@ -624,6 +629,7 @@ impl<'a> Frame<'a> {
             shadow_walls,
             shadow_wall_count,
             nee: params.flags & FLAG_NEE != 0,
+            connect: params.flags & FLAG_NEE != 0 && params.flags & FLAG_CONNECT != 0 && mask.is_empty(),
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
             glow: glow > 0.0,
@@ -882,6 +888,8 @@ struct Paths<const DRAWS: u32, const PCG: bool> {
     skip_wall: U,
     bsdf_pdf: F,
     nee_pdf: F,
+    scatter_pdf: F,
+    direct_weight: F,
     sampler: Sampler<DRAWS, PCG>,
 }
 
@@ -906,6 +914,8 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
             skip_wall: U::splat(NO_WALL),
             bsdf_pdf: F::splat(0.0),
             nee_pdf: F::splat(0.0),
+            scatter_pdf: F::splat(0.0),
+            direct_weight: F::splat(1.0),
             sampler,
         }
     }
@@ -921,6 +931,8 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
             skip_wall: selu(m, a.skip_wall, b.skip_wall),
             bsdf_pdf: sel(m, a.bsdf_pdf, b.bsdf_pdf),
             nee_pdf: sel(m, a.nee_pdf, b.nee_pdf),
+            scatter_pdf: sel(m, a.scatter_pdf, b.scatter_pdf),
+            direct_weight: sel(m, a.direct_weight, b.direct_weight),
             sampler: Sampler::select(m, a.sampler, b.sampler),
         }
     }
@@ -968,7 +980,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
             let direct = self.bounces.eq(U::splat(0)) | M::splat(!frame.nee) | self.nee_pdf.eq(F::splat(0.0));
             let weight = if frame.mis { power_heuristic(self.bsdf_pdf, self.nee_pdf) } else { F::splat(0.0) };
             let weight = sel(direct, F::splat(1.0), weight);
-            let add = self.throughput.mulv(light.radiance).scale(weight);
+            let add = self.throughput.mulv(light.radiance).scale(weight * self.direct_weight);
             self.radiance = selv(lit & front, self.radiance + add, self.radiance);
         }
         let object = act & !nothing & !lit;
@@ -1023,6 +1035,18 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         // offset_origin.
         let err = magnitude.scale(F::splat(HIT_ERROR_EPS));
         let origin = p + n.scale(n.abs().dot(err));
+        if frame.connect {
+            // The share of this vertex's direct light a connection from the
+            // vertex before leaves to this path (`Path::step`).
+            let to_light = V3::splat(light.center) - p;
+            let d2 = to_light.dot(to_light);
+            let cos_light = n.dot(to_light);
+            let cos_in = -n.dot(d);
+            let bsdf_area = self.scatter_pdf * cos_in / (t * t);
+            let weight = power_heuristic(bsdf_area, connection_pdf(cos_light / d2.sqrt(), d2));
+            let applies = !self.bounces.eq(U::splat(0)) & hit_wall & cos_light.gt(F::splat(0.0));
+            self.direct_weight = sel(applies, weight, F::splat(1.0));
+        }
 
         let cone = light_cone(frame, p);
         let cone_pdf = cone.pdf();
@@ -1058,8 +1082,18 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
                     F::splat(1.0)
                 };
                 let value = sel(projected, cone.projected_over_pi(n), bsdf * weight / cone_pdf);
-                let add = (self.throughput * albedo).mulv(light.radiance).scale(value);
+                let add = (self.throughput * albedo).mulv(light.radiance).scale(value * self.direct_weight);
                 self.radiance = selv(shoot & !blocked, self.radiance + add, self.radiance);
+            }
+        }
+        if frame.connect {
+            let m = live & self.bounces.add(U::splat(1)).lt(U::splat(params.max_bounces));
+            if m.any() {
+                let u = self.sampler.next_2d(m);
+                let v = self.sampler.next_2d(m);
+                let (through, ok) = connection(frame, n, origin, &scatter, u, v, m);
+                let add = (self.throughput * albedo) * through;
+                self.radiance = selv(ok, self.radiance + add, self.radiance);
             }
         }
 
@@ -1077,6 +1111,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         live = live & ok;
         self.bsdf_pdf = sel(live, sel(last | projected, F::splat(0.0), pdf), self.bsdf_pdf);
         self.nee_pdf = sel(live, cone_pdf, self.nee_pdf);
+        self.scatter_pdf = sel(live, pdf, self.scatter_pdf);
         let throughput = self.throughput * albedo.scale(cos * (1.0 / PI) / pdf);
         self.throughput = selv(live, throughput, self.throughput);
         self.bounces = selu(live, self.bounces.add(U::splat(1)), self.bounces);
@@ -1102,6 +1137,95 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         self.skip_wall = selu(live, wall_index, self.skip_wall);
         ended
     }
+}
+
+/// `connection_pdf` of `pt_core::integrator` per lane.
+#[inline(always)]
+fn connection_pdf(cos: F, d2: F) -> F {
+    cos / ((4.0 * PI) * d2)
+}
+
+/// `connection` of `pt_core::integrator` on the lanes in `m`: the radiance
+/// over the vertex's albedo, and the lanes where it is not 0 (the others
+/// returned 0 there).
+#[inline(always)]
+fn connection(frame: &Frame, n: V3, origin: V3, scatter: &Scatter, u: (F, F), v: (F, F), m: M) -> (V3, M) {
+    let params = frame.params;
+    let geometry = frame.geometry;
+    let light = &params.light;
+    let z = 1.0 - 2.0 * u.0;
+    let s = (1.0 - z * z).max(F::splat(0.0)).sqrt();
+    let (sin_phi, cos_phi) = sin_cos_turn(u.1);
+    let c = V3::splat(light.center);
+    let dc = V3 { x: s * cos_phi, y: s * sin_phi, z };
+    // first_wall: every wall, none skipped.
+    let mut t = F::splat(pt_core::query::T_FAR);
+    let mut index = U::splat(0);
+    let mut found = M::splat(false);
+    for i in 0..frame.walls {
+        let ti = intersect_wall(&geometry.walls[i as usize], c, dc, t);
+        let nearer = ti.lt(t);
+        t = sel(nearer, ti, t);
+        index = selu(nearer, U::splat(i), index);
+        found = found | nearer;
+    }
+    let mut m = m & found;
+    if !m.any() {
+        return (V3::splat(Vec3::ZERO), m);
+    }
+    let mut normal = [[0.0; LANES]; 3];
+    let mut albedo = [[0.0; LANES]; 3];
+    let (index_lanes, lanes) = (index.to_array(), U(m.0).to_array());
+    for k in 0..LANES {
+        if lanes[k] != 0 {
+            let w = &geometry.walls[(index_lanes[k] as usize).min(MAX_WALLS - 1)];
+            (normal[0][k], normal[1][k], normal[2][k]) = (w.normal.x, w.normal.y, w.normal.z);
+            (albedo[0][k], albedo[1][k], albedo[2][k]) = (w.albedo.x, w.albedo.y, w.albedo.z);
+        }
+    }
+    let (normal, wall_albedo) = (V3::from_arrays(normal), V3::from_arrays(albedo));
+    let y = c.at(dc, t);
+    let magnitude = c.abs() + dc.scale(t).abs();
+    let ny = selv(normal.dot(dc).lt(F::splat(0.0)), normal, -normal);
+    let pdf_area = connection_pdf(-ny.dot(dc), t * t);
+    let to_y = y - origin;
+    let d2 = to_y.dot(to_y);
+    let dist = d2.sqrt();
+    let dir = to_y.div(dist);
+    let (cos_p, cos_y) = (n.dot(dir), -ny.dot(dir));
+    let zero = F::splat(0.0);
+    let cone = light_cone(frame, y);
+    m = m & cos_p.gt(zero) & cos_y.gt(zero) & pdf_area.gt(zero) & !cone.empty;
+    if !m.any() {
+        return (V3::splat(Vec3::ZERO), m);
+    }
+    let hides = intersect_sphere(light.center, light.radius, origin, dir, dist).lt(dist);
+    m = m & !hides & !occluded(frame, origin, dir, index, dist, m);
+    if !m.any() {
+        return (V3::splat(Vec3::ZERO), m);
+    }
+    let projected = if frame.projected { cone.above_horizon(ny) & m } else { M::splat(false) };
+    let (mut to_light, mut light_dist) = (V3::splat(Vec3::ZERO), zero);
+    if (m & !projected).any() {
+        (to_light, light_dist) = cone.sample(v.0, v.1);
+    }
+    if projected.any() {
+        let (p_dir, p_dist) = cone.sample_projected(ny, v.0, v.1);
+        (to_light, light_dist) = (selv(projected, p_dir, to_light), sel(projected, p_dist, light_dist));
+    }
+    let cos_light = ny.dot(to_light);
+    m = m & cos_light.gt(zero);
+    if !m.any() {
+        return (V3::splat(Vec3::ZERO), m);
+    }
+    let err = magnitude.scale(F::splat(HIT_ERROR_EPS));
+    let shadow_origin = y + ny.scale(ny.abs().dot(err));
+    m = m & !occluded(frame, shadow_origin, to_light, index, light_dist, m);
+    let direct = sel(projected, cone.projected_over_pi(ny), cos_light * (1.0 / PI) / cone.pdf());
+    let bsdf_area = scatter.pdf(dir) * cos_y / d2;
+    let weight = power_heuristic(pdf_area, bsdf_area);
+    let geometry_term = cos_p * cos_y / (PI * d2 * pdf_area);
+    (wall_albedo.mulv(light.radiance).scale(direct * geometry_term * weight), m)
 }
 
 /// `occluded` per lane, for the lanes in `m`: the walls that can shadow the
@@ -1287,7 +1411,7 @@ mod tests {
         assert!(available(), "this test needs a CPU with AVX2, which the CPU renderer uses where it has it");
         let mut checked = 0;
         for (name, base, geometry) in scenes() {
-            for flags in 0..256u32 {
+            for flags in 0..512u32 {
                 let known = FLAG_NEE
                     | FLAG_MIS
                     | FLAG_SOBOL
@@ -1295,7 +1419,8 @@ mod tests {
                     | FLAG_GLOW
                     | FLAG_SOBOL_DEEP
                     | FLAG_NEE_PROJECTED
-                    | FLAG_GLOW_SPARSE;
+                    | FLAG_GLOW_SPARSE
+                    | FLAG_CONNECT;
                 assert_eq!(flags & !known, 0);
                 for (max_bounces, spp) in [(5, 7), (1, 1), (16, 7), (5, 0)] {
                     let params =
@@ -1318,6 +1443,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 5 * 256 * 3 * 32);
+        assert_eq!(checked, 5 * 512 * 3 * 32);
     }
 }

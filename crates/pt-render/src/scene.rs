@@ -286,7 +286,9 @@ impl Scene {
         geometry(&self.gpu_walls(), &self.gpu_spheres())
     }
 
-    /// The kernel's parameters for frame 0 of a render with `settings`.
+    /// The kernel's parameters for frame 0 of a render with `settings`,
+    /// with the GPU's default flags: a CPU render that wants its own sets
+    /// `flags` to `default_flags(Backend::Cpu)`.
     pub fn frame_params(&self, settings: &RenderSettings, samples_per_frame: u32, seed: u32) -> FrameParams {
         FrameParams {
             camera: self.camera.to_gpu(settings.width, settings.height),
@@ -303,17 +305,17 @@ impl Scene {
             wall_count: self.walls.len() as u32,
             sphere_count: self.spheres.len() as u32,
             tonemap: TONEMAP_ACES,
-            flags: self.default_flags(),
+            flags: self.default_flags(crate::strategy::Backend::Gpu),
             sample_offset: 0,
             tile: Tile::whole(settings.width, settings.height),
         }
     }
 
-    /// The integrator flags this scene renders with unless told otherwise
-    /// (`strategy::default_flags`: the project's defaults, adapted to the
-    /// size of the light).
-    pub fn default_flags(&self) -> u32 {
-        crate::strategy::default_flags(self)
+    /// The integrator flags this scene renders with on `backend` unless
+    /// told otherwise (`strategy::default_flags`: the project's defaults,
+    /// adapted to the size of the light and to the backend).
+    pub fn default_flags(&self, backend: crate::strategy::Backend) -> u32 {
+        crate::strategy::default_flags(self, backend)
     }
 
     /// The scene as TOML that [`Scene::from_toml`] reads back unchanged.

@@ -24,12 +24,33 @@
 //! `pathtracer bench convergence --suite` measured the thresholds: see
 //! [`GLOW_MAX_EXTENT`], [`GLOW_MAX_ALBEDO`] and [`GLOW_MAX_CLEARANCE`].
 //!
+//! Where no wall can shadow the light (a convex room around it, which is
+//! every scene of the suite), connections through lit wall points
+//! (`FLAG_CONNECT`) take the glow lobe's place: they find the light's
+//! bright surroundings by construction. What they cost depends on the
+//! backend, and so does the default ([`Backend`]):
+//! - on a GPU adapter they take the lobe's place around every light: on
+//!   lavapipe they cost about what the lobe's logarithm and exponential
+//!   cost, which every SIMD lane runs, and they reached relMSE 1e-3 in
+//!   0.49x to 0.84x the glow lobe's time on every scene of the suite;
+//! - the CPU's eight lanes take a logarithm only where a lane picks the
+//!   lobe, and there the connections' extra rays cost more than they save
+//!   around large lights (1.2x to 1.7x the lobe's time to 1e-3), while
+//!   around small lights they still win (0.72x to 0.83x): they take the
+//!   lobe's place where it would take a quarter of the samples
+//!   ([`glow_pays`]).
+//!
+//! The glow-lobe rule above is the rule for the rest: rooms where some
+//! wall shadows the light ([`connections_apply`]), and large lights on the
+//! CPU. (docs/ARCHITECTURE.md, "Connections through lit wall points", has
+//! the measurements.)
+//!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.
 
 use pt_core::glam::Vec3;
 use pt_core::light::light_cone;
-use pt_core::params::{FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAGS_DEFAULT};
 
 use crate::scene::Scene;
 
@@ -170,12 +191,51 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
     if area > 0.0 { (weighted / area) as f32 } else { 0.0 }
 }
 
-/// The integrator flags `scene` renders with unless told otherwise: the
-/// project's defaults (`FLAGS_DEFAULT`) where the glow lobe pays at its full
-/// probability ([`glow_pays`]); else MIS, with the glow lobe at a tenth
-/// (`FLAG_GLOW_SPARSE`) where the light is within [`GLOW_MAX_CLEARANCE`]
-/// radii of a wall, and without it farther out.
-pub fn default_flags(scene: &Scene) -> u32 {
+/// The kind of device a render runs on, as far as the default strategy
+/// depends on it (see the module's documentation).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// The kernel on a GPU adapter, lavapipe included.
+    Gpu,
+    /// The CPU renderer.
+    Cpu,
+}
+
+/// The integrator flags `scene` renders with on `backend` unless told
+/// otherwise: the glow-lobe rule ([`glow_flags`]), with connections instead
+/// of the glow lobe where they apply ([`connections_apply`]) and pay on
+/// the backend (everywhere on a GPU, around small lights on the CPU). The
+/// glow lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it,
+/// so that switching the lobe back on gives the share the light calls for.
+pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
+    let glow = glow_flags(scene);
+    let pays = backend == Backend::Gpu || glow_pays(scene);
+    if pays && connections_apply(scene) { with_connections(glow) } else { glow }
+}
+
+/// `flags` with connections in the glow lobe's place.
+pub fn with_connections(flags: u32) -> u32 {
+    (flags & !FLAG_GLOW) | FLAG_CONNECT
+}
+
+/// Whether the connections (`FLAG_CONNECT`) are on in `scene`'s kernel:
+/// it has walls, and none of them can shadow the light
+/// (`pt_core::Wall::cannot_shadow`), so that every wall point is the first
+/// one met from the light's centre in its direction, the condition the
+/// connections' density rests on. The path loop checks the same (an empty
+/// `ShadowWalls`) and leaves them off elsewhere, whatever the flags say.
+pub fn connections_apply(scene: &Scene) -> bool {
+    match scene.geometry() {
+        Ok(g) => !scene.walls.is_empty() && g.walls[..scene.walls.len()].iter().all(|w| w.cannot_shadow(&scene.light)),
+        Err(_) => false,
+    }
+}
+
+/// The glow-lobe rule: the project's defaults (`FLAGS_DEFAULT`) where the
+/// glow lobe pays at its full probability ([`glow_pays`]); else MIS, with
+/// the glow lobe at a tenth (`FLAG_GLOW_SPARSE`) where the light is within
+/// [`GLOW_MAX_CLEARANCE`] radii of a wall, and without it farther out.
+pub fn glow_flags(scene: &Scene) -> u32 {
     if glow_pays(scene) {
         FLAGS_DEFAULT
     } else if light_clearance(scene) <= GLOW_MAX_CLEARANCE {
@@ -233,10 +293,10 @@ mod tests {
     fn the_glow_lobe_is_sparse_around_large_lights() {
         let default = Scene::default_scene();
         assert!(light_extent(&default) < GLOW_MAX_EXTENT);
-        assert_eq!(default_flags(&default), FLAGS_DEFAULT);
+        assert_eq!(glow_flags(&default), FLAGS_DEFAULT);
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
         assert!(light_extent(&large) > 5.0 * GLOW_MAX_EXTENT);
-        assert_eq!(default_flags(&large), FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_MIS);
+        assert_eq!(glow_flags(&large), FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_MIS);
         // Radius 0.3 half a radius below the ceiling (extent 0.032) and
         // radius 0.25 in the middle of the room (0.028): above the bound;
         // the one beside the ceiling takes the lobe at a tenth, the one in
@@ -244,15 +304,16 @@ mod tests {
         for (r, y, flags) in [(0.3, 1.55, sparse()), (0.25, 1.0, in_the_open())] {
             let e = light_extent(&with_light(r, Vec3::new(0.0, y, 0.0)));
             assert!(e > GLOW_MAX_EXTENT && e < 0.04, "{e}");
-            assert_eq!(default_flags(&with_light(r, Vec3::new(0.0, y, 0.0))), flags);
+            assert_eq!(glow_flags(&with_light(r, Vec3::new(0.0, y, 0.0))), flags);
         }
         // The extent grows with the light's radius at a fixed centre.
         let radii = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45];
         let e: Vec<f32> = radii.iter().map(|&r| light_extent(&with_light(r, Vec3::new(0.0, 1.0, 0.0)))).collect();
         assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
-        // And it is the frame parameters' default too.
+        // And, with connections instead of the lobe, the frame parameters'
+        // default.
         let st = large.render;
-        assert_eq!(large.frame_params(&st, 1, 0).flags, sparse());
+        assert_eq!(large.frame_params(&st, 1, 0).flags, with_connections(sparse()));
     }
 
     #[test]
@@ -263,13 +324,13 @@ mod tests {
         // Radius 0.3, 0.15 below the ceiling: half a radius.
         let medium = with_light(0.3, Vec3::new(0.0, 1.55, 0.0));
         assert!((light_clearance(&medium) - 0.5).abs() < 1e-4, "{}", light_clearance(&medium));
-        assert_eq!(default_flags(&medium), sparse());
+        assert_eq!(glow_flags(&medium), sparse());
         // Radius 0.25 in the middle of the room: three radii from the floor,
         // the ceiling and the side walls, though 0.63 radii above the large
         // sphere: spheres do not count.
         let centre = with_light(0.25, Vec3::new(0.0, 1.0, 0.0));
         assert!((light_clearance(&centre) - 3.0).abs() < 1e-4, "{}", light_clearance(&centre));
-        assert_eq!(default_flags(&centre), in_the_open());
+        assert_eq!(glow_flags(&centre), in_the_open());
         assert_eq!(in_the_open() & FLAG_GLOW, 0);
         assert_eq!(in_the_open() | FLAG_GLOW, sparse());
         // Moved to 0.1 (0.4 radii) from the back wall it takes the lobe at
@@ -278,16 +339,16 @@ mod tests {
         // counts, and just inside the bound it takes the lobe at a tenth.
         let wall = with_light(0.25, Vec3::new(0.0, 1.0, -0.65));
         assert!((light_clearance(&wall) - 0.4).abs() < 1e-4, "{}", light_clearance(&wall));
-        assert_eq!(default_flags(&wall), sparse());
+        assert_eq!(glow_flags(&wall), sparse());
         let bound = with_light(0.25, Vec3::new(0.0, 1.0, -0.25));
         assert!((light_clearance(&bound) - GLOW_MAX_CLEARANCE).abs() < 1e-4, "{}", light_clearance(&bound));
         let inside = with_light(0.25, Vec3::new(0.0, 1.0, -0.26));
         assert!(light_clearance(&inside) < GLOW_MAX_CLEARANCE);
-        assert_eq!(default_flags(&inside), sparse());
+        assert_eq!(glow_flags(&inside), sparse());
         // A small light in the open keeps the quarter: the extent decides first.
         let small = with_light(0.05, Vec3::new(0.0, 1.0, 0.0));
         assert!(light_clearance(&small) > 10.0);
-        assert_eq!(default_flags(&small), FLAGS_DEFAULT);
+        assert_eq!(glow_flags(&small), FLAGS_DEFAULT);
         // Without walls nothing is near.
         assert_eq!(light_clearance(&Scene { walls: Vec::new(), ..centre.clone() }), f32::INFINITY);
         // Past a wall's edge the nearest point is on the edge: a point 0.5
@@ -327,11 +388,60 @@ mod tests {
                 } else {
                     FLAGS_DEFAULT
                 };
-                assert_eq!(default_flags(&scene), expected, "{name}");
+                assert_eq!(glow_flags(&scene), expected, "{name}");
                 seen += 1;
             }
         }
         assert_eq!(seen, 15);
+    }
+
+    /// Connections replace the glow lobe wherever no wall shadows the
+    /// light (every scene of the suite) on a GPU, and on the CPU where the
+    /// lobe would take a quarter of the samples; a partition that can stand
+    /// between the room and the light, a light outside the room, or a scene
+    /// without walls keep the glow-lobe rule on both.
+    #[test]
+    fn connections_replace_the_glow_lobe_in_rooms_that_do_not_shadow_the_light() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut seen = 0;
+        for sub in [dir.clone(), dir.join("holdout")] {
+            for entry in std::fs::read_dir(&sub).unwrap() {
+                let path = entry.unwrap().path();
+                if path.extension().is_some_and(|e| e == "toml") {
+                    let scene = Scene::load(&path).unwrap();
+                    assert!(connections_apply(&scene), "{}", path.display());
+                    let glow = glow_flags(&scene);
+                    assert_eq!(default_flags(&scene, Backend::Gpu), with_connections(glow), "{}", path.display());
+                    let cpu = if glow_pays(&scene) { with_connections(glow) } else { glow };
+                    assert_eq!(default_flags(&scene, Backend::Cpu), cpu, "{}", path.display());
+                    seen += 1;
+                }
+            }
+        }
+        assert_eq!(seen, 15);
+        let default = Scene::default_scene();
+        let mut partition = default.clone();
+        let v = Vec3::new;
+        partition.walls.push(crate::scene::NamedWall {
+            name: "partition".into(),
+            wall: pt_core::Wall::new(v(-0.6, 0.0, 0.2), v(0.9, 0.0, -0.6), v(0.0, 1.3, 0.0), Vec3::splat(0.5)),
+        });
+        assert!(!connections_apply(&partition));
+        for backend in [Backend::Gpu, Backend::Cpu] {
+            assert_eq!(default_flags(&partition, backend), glow_flags(&partition));
+        }
+        assert_eq!(default_flags(&partition, Backend::Gpu) & FLAG_CONNECT, 0);
+        let outside = with_light(0.1, Vec3::new(0.0, 1.0, -1.5));
+        assert!(!connections_apply(&outside));
+        let bare = Scene { walls: Vec::new(), ..default.clone() };
+        assert!(!connections_apply(&bare));
+        assert_eq!(default_flags(&bare, Backend::Gpu), glow_flags(&bare));
+        // The default scene's small light: connections on both backends;
+        // a large light: on a GPU only.
+        assert_eq!(default_flags(&default, Backend::Cpu), with_connections(FLAGS_DEFAULT));
+        let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
+        assert_eq!(default_flags(&large, Backend::Gpu), with_connections(sparse()));
+        assert_eq!(default_flags(&large, Backend::Cpu), sparse());
     }
 
     #[test]
@@ -347,7 +457,7 @@ mod tests {
             s.sphere.albedo = Vec3::splat(0.9);
         }
         assert!((mean_albedo(&bright) - 0.9).abs() < 1e-6);
-        assert_eq!(default_flags(&bright), sparse());
+        assert_eq!(glow_flags(&bright), sparse());
         // Area weights: one 2x2 wall of albedo 1 and one of 0 average 1/2,
         // a sphere of radius 1 (area 4 pi) against a 2x2 wall (area 4)
         // weighs pi times as much.

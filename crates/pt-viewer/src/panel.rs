@@ -2,7 +2,7 @@
 
 use egui::{Color32, RichText, Ui};
 use pt_core::glam::Vec3;
-use pt_core::params::{FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
+use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_MIS, FLAG_NEE, FLAG_SOBOL, TONEMAP_ACES, TONEMAP_CLAMP};
 
 use crate::settings::{SamplesPerFrame, ViewSettings};
 
@@ -178,8 +178,15 @@ fn render(ui: &mut Ui, s: &mut ViewSettings, actions: &mut Actions) {
             ui.checkbox(&mut sobol, "Sobol");
             let mut glow = s.flags & FLAG_GLOW != 0;
             ui.checkbox(&mut glow, "glow lobe").on_hover_text("BSDF sampling also aims around the light");
+            let mut connect = s.flags & FLAG_CONNECT != 0;
+            ui.add_enabled(nee, egui::Checkbox::new(&mut connect, "connections")).on_hover_text(
+                "light reflected once by a wall, reached through wall points the light shines on (rooms whose walls \
+                 do not shadow the light)",
+            );
             // Only the switches shown here change; other flags are kept.
-            for (bit, on) in [(FLAG_NEE, nee), (FLAG_MIS, mis), (FLAG_SOBOL, sobol), (FLAG_GLOW, glow)] {
+            let switches =
+                [(FLAG_NEE, nee), (FLAG_MIS, mis), (FLAG_SOBOL, sobol), (FLAG_GLOW, glow), (FLAG_CONNECT, connect)];
+            for (bit, on) in switches {
                 s.flags = if on { s.flags | bit } else { s.flags & !bit };
             }
         });
