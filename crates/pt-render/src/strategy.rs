@@ -32,7 +32,8 @@
 //! - on a GPU adapter they take the lobe's place around every light: on
 //!   lavapipe they cost about what the lobe's logarithm and exponential
 //!   cost, which every SIMD lane runs, and they reached relMSE 1e-3 in
-//!   0.49x to 0.84x the glow lobe's time on every scene of the suite;
+//!   0.19x to 0.84x the glow lobe's time on the seven scenes of the suite
+//!   measured, the tiny light to the light in the middle of the room;
 //! - the CPU's eight lanes take a logarithm only where a lane picks the
 //!   lobe, and there the connections' extra rays cost more than they save
 //!   around large lights (1.2x to 1.7x the lobe's time to 1e-3), while
