@@ -178,17 +178,20 @@ fn render(ui: &mut Ui, s: &mut ViewSettings, actions: &mut Actions) {
             ui.checkbox(&mut sobol, "Sobol");
             let mut glow = s.flags & FLAG_GLOW != 0;
             ui.checkbox(&mut glow, "glow lobe").on_hover_text("BSDF sampling also aims around the light");
+            // Only the switches shown here change; other flags are kept.
+            for (bit, on) in [(FLAG_NEE, nee), (FLAG_MIS, mis), (FLAG_SOBOL, sobol), (FLAG_GLOW, glow)] {
+                s.flags = if on { s.flags | bit } else { s.flags & !bit };
+            }
+        });
+        // On a row of its own, so that the panel keeps its width.
+        ui.horizontal(|ui| {
+            let nee = s.flags & FLAG_NEE != 0;
             let mut connect = s.flags & FLAG_CONNECT != 0;
             ui.add_enabled(nee, egui::Checkbox::new(&mut connect, "connections")).on_hover_text(
                 "light reflected once by a wall, reached through wall points the light shines on (rooms whose walls \
                  do not shadow the light)",
             );
-            // Only the switches shown here change; other flags are kept.
-            let switches =
-                [(FLAG_NEE, nee), (FLAG_MIS, mis), (FLAG_SOBOL, sobol), (FLAG_GLOW, glow), (FLAG_CONNECT, connect)];
-            for (bit, on) in switches {
-                s.flags = if on { s.flags | bit } else { s.flags & !bit };
-            }
+            s.flags = if connect { s.flags | FLAG_CONNECT } else { s.flags & !FLAG_CONNECT };
         });
         ui.horizontal(|ui| {
             ui.checkbox(&mut s.paused, "pause");
