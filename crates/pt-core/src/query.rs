@@ -108,8 +108,23 @@ pub fn counts(params: &FrameParams) -> (u32, u32) {
 /// noise.
 #[inline]
 pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> Hit {
+    let mut hit = nearest_wall(ray, params, geometry, skip_wall, t_max);
+    let (_, sphere_count) = counts(params);
+    let mut i = 0;
+    while i < sphere_count {
+        hit.test_sphere(i, &geometry.spheres[i as usize], ray);
+        i += 1;
+    }
+    hit.test_light(&params.light, ray);
+    hit
+}
+
+/// The nearest wall hit in (0, `t_max`) but `skip_wall`: the walls' part of
+/// [`closest_hit`], and alone [`SceneView::first_wall`].
+#[inline]
+fn nearest_wall(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wall: u32, t_max: f32) -> Hit {
     let mut hit = Hit::none(t_max);
-    let (wall_count, sphere_count) = counts(params);
+    let (wall_count, _) = counts(params);
     let mut i = 0;
     while i < wall_count {
         if i != skip_wall {
@@ -117,12 +132,6 @@ pub fn closest_hit(ray: &Ray, params: &FrameParams, geometry: &Geometry, skip_wa
         }
         i += 1;
     }
-    let mut i = 0;
-    while i < sphere_count {
-        hit.test_sphere(i, &geometry.spheres[i as usize], ray);
-        i += 1;
-    }
-    hit.test_light(&params.light, ray);
     hit
 }
 
@@ -299,14 +308,7 @@ impl SceneView for Geometry {
 
     #[inline]
     fn first_wall(&self, ray: &Ray, params: &FrameParams) -> Hit {
-        let mut hit = Hit::none(T_FAR);
-        let (wall_count, _) = counts(params);
-        let mut i = 0;
-        while i < wall_count {
-            hit.test_wall(i, &self.walls[i as usize], ray);
-            i += 1;
-        }
-        hit
+        nearest_wall(ray, params, self, NO_WALL, T_FAR)
     }
 
     #[inline]

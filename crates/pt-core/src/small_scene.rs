@@ -103,16 +103,26 @@ impl<'a, const W: u32, const S: u32> SmallScene<'a, W, S> {
     }
 }
 
-impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
-    /// The same tests as [`crate::query::closest_hit`], in the same
-    /// order, on the copy.
-    fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
+impl<const W: u32, const S: u32> SmallScene<'_, W, S> {
+    /// The nearest wall hit in (0, `t_max`) but `skip_wall`, unrolled: the
+    /// walls' part of `closest_hit`, and alone `first_wall`.
+    #[inline(always)]
+    fn nearest_wall(&self, ray: &Ray, skip_wall: u32, t_max: f32) -> Hit {
         let mut hit = Hit::none(t_max);
         unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
                 hit.test_wall(i, &self.walls[i as usize], ray);
             }
         });
+        hit
+    }
+}
+
+impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
+    /// The same tests as [`crate::query::closest_hit`], in the same
+    /// order, on the copy.
+    fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
+        let mut hit = self.nearest_wall(ray, skip_wall, t_max);
         unrolled::<S>(|i| {
             if i < self.sphere_count {
                 hit.test_sphere(i, &self.spheres[i as usize], ray);
@@ -123,13 +133,7 @@ impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
     }
 
     fn first_wall(&self, ray: &Ray, _params: &FrameParams) -> Hit {
-        let mut hit = Hit::none(crate::query::T_FAR);
-        unrolled::<W>(|i| {
-            if i < self.wall_count {
-                hit.test_wall(i, &self.walls[i as usize], ray);
-            }
-        });
-        hit
+        self.nearest_wall(ray, crate::query::NO_WALL, crate::query::T_FAR)
     }
 
     /// Spheres only: [`SmallScene::fits`] leaves no wall that can block a

@@ -947,16 +947,8 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         let (o, d) = (self.origin, self.dir);
 
         // closest_hit: walls, spheres, then the light, strictly nearer.
-        let mut t = F::splat(pt_core::query::T_FAR);
-        let mut kind = U::splat(NOTHING);
-        let mut index = U::splat(0);
-        for i in 0..frame.walls {
-            let ti = intersect_wall(&geometry.walls[i as usize], o, d, t);
-            let nearer = ti.lt(t) & !self.skip_wall.eq(U::splat(i));
-            t = sel(nearer, ti, t);
-            kind = selu(nearer, U::splat(WALL), kind);
-            index = selu(nearer, U::splat(i), index);
-        }
+        let (mut t, mut index, on_wall) = nearest_wall(frame, o, d, self.skip_wall);
+        let mut kind = selu(on_wall, U::splat(WALL), U::splat(NOTHING));
         for i in 0..frame.spheres {
             let s = &geometry.spheres[i as usize];
             let ti = intersect_sphere(s.center, s.radius, o, d, t);
@@ -1139,6 +1131,24 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
     }
 }
 
+/// The nearest wall hit per lane but each lane's `skip_wall` (`nearest_wall`
+/// of `pt_core::query`): its `t` (`T_FAR` where none), index, and the lanes
+/// that hit one.
+#[inline(always)]
+fn nearest_wall(frame: &Frame, o: V3, d: V3, skip_wall: U) -> (F, U, M) {
+    let mut t = F::splat(pt_core::query::T_FAR);
+    let mut index = U::splat(0);
+    let mut found = M::splat(false);
+    for i in 0..frame.walls {
+        let ti = intersect_wall(&frame.geometry.walls[i as usize], o, d, t);
+        let nearer = ti.lt(t) & !skip_wall.eq(U::splat(i));
+        t = sel(nearer, ti, t);
+        index = selu(nearer, U::splat(i), index);
+        found = found | nearer;
+    }
+    (t, index, found)
+}
+
 /// `connection_pdf` of `pt_core::integrator` per lane.
 #[inline(always)]
 fn connection_pdf(cos: F, d2: F) -> F {
@@ -1159,16 +1169,7 @@ fn connection(frame: &Frame, n: V3, origin: V3, scatter: &Scatter, u: (F, F), v:
     let c = V3::splat(light.center);
     let dc = V3 { x: s * cos_phi, y: s * sin_phi, z };
     // first_wall: every wall, none skipped.
-    let mut t = F::splat(pt_core::query::T_FAR);
-    let mut index = U::splat(0);
-    let mut found = M::splat(false);
-    for i in 0..frame.walls {
-        let ti = intersect_wall(&geometry.walls[i as usize], c, dc, t);
-        let nearer = ti.lt(t);
-        t = sel(nearer, ti, t);
-        index = selu(nearer, U::splat(i), index);
-        found = found | nearer;
-    }
+    let (t, index, found) = nearest_wall(frame, c, dc, U::splat(NO_WALL));
     let mut m = m & found;
     if !m.any() {
         return (V3::splat(Vec3::ZERO), m);
