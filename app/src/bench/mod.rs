@@ -101,8 +101,9 @@ pub enum StrategyId {
     Spp16,
     /// 4 samples per pixel per frame.
     Spp4,
-    /// Sobol points for every draw of a path.
-    SobolEverywhere,
+    /// Sobol points for every draw switched: for the first 5 draws only
+    /// where the default has them for every draw, else for every draw.
+    SobolSwitched,
     /// NEE uniform in the light's cone everywhere, never by projected
     /// solid angle.
     NeeUniform,
@@ -178,7 +179,7 @@ const _: () = assert!(
 pub const STRATEGIES: [Strategy; 14] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: Sobol (first 5 draws), NEE by projected solid angle (no MIS), connections through lit wall points (on the CPU around small lights only; else the glow lobe: a quarter, a tenth around large lights, none in the open), RR from 5, 64 spp/frame",
+        name: "default: NEE by projected solid angle (no MIS), connections through lit wall points with Sobol for every draw (on the CPU around small lights only; the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -250,9 +251,9 @@ pub const STRATEGIES: [Strategy; 14] = [
     },
     Strategy { id: StrategyId::Spp4, name: "4 spp/frame", flags: |f| f, rr_start: DEFAULT_RR_START, spp_per_frame: 4 },
     Strategy {
-        id: StrategyId::SobolEverywhere,
-        name: "Sobol for every draw",
-        flags: |f| f | FLAG_SOBOL_DEEP,
+        id: StrategyId::SobolSwitched,
+        name: "Sobol draws switched (the first 5 only where the default has every one; else every one)",
+        flags: |f| f ^ FLAG_SOBOL_DEEP,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -265,8 +266,14 @@ pub const STRATEGIES: [Strategy; 14] = [
     },
     Strategy {
         id: StrategyId::ConnectionsSwitched,
-        name: "connections switched (off, with the glow lobe at the light's share, where the default has them; else on, in the lobe's place)",
-        flags: |f| if f & FLAG_CONNECT != 0 { (f & !FLAG_CONNECT) | FLAG_GLOW } else { with_connections(f) },
+        name: "connections switched (off, with the glow lobe at the light's share and Sobol for the first 5 draws, where the default has them; else on, in the lobe's place, with Sobol for every draw)",
+        flags: |f| {
+            if f & FLAG_CONNECT != 0 {
+                (f & !(FLAG_CONNECT | FLAG_SOBOL_DEEP)) | FLAG_GLOW
+            } else {
+                with_connections(f) | FLAG_SOBOL_DEEP
+            }
+        },
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -318,7 +325,9 @@ mod tests {
             assert_eq!(same(&small, backend), [StrategyId::GlowOff]);
             assert_eq!(same(&open, backend), [StrategyId::NeeMis, StrategyId::GlowOff]);
         }
-        assert_eq!(same(&large, gpu), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        // The large light is within a radius of the ceiling and three walls:
+        // on a GPU the glow lobe joins the connections.
+        assert_eq!(same(&large, gpu), [StrategyId::NeeMis]);
         assert_eq!(same(&large, cpu), [StrategyId::NeeMis]);
         // Switching the share turns the lobe on at the light's share where
         // the default has none, and swaps a quarter and a tenth elsewhere.
@@ -328,15 +337,22 @@ mod tests {
         assert_eq!(pt_core::bsdf::glow_probability(open.default_flags(cpu)), 0.0);
         assert_eq!(switched(&open, cpu), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
         assert_eq!(switched(&large, cpu), pt_core::bsdf::GLOW_PROBABILITY);
-        assert_eq!(switched(&large, gpu), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(switched(&large, gpu), pt_core::bsdf::GLOW_PROBABILITY);
         assert_eq!(switched(&small, gpu), pt_core::bsdf::GLOW_PROBABILITY);
         // Switching the connections gives the glow-lobe rule where the
-        // default has them, and them where it has not.
+        // default has them, and them (with Sobol for every draw) where it
+        // has not.
         let connections =
             |scene: &pt_render::Scene, backend| StrategyId::ConnectionsSwitched.strategy().flags_for(scene, backend);
         assert_eq!(connections(&small, cpu), pt_core::params::FLAGS_DEFAULT);
         assert_eq!(connections(&large, gpu), large.default_flags(cpu));
-        assert_eq!(connections(&large, cpu), large.default_flags(gpu));
+        assert_eq!(connections(&large, cpu), large.default_flags(gpu) & !FLAG_GLOW);
+        assert_eq!(connections(&open, cpu), open.default_flags(gpu));
+        // Switching the Sobol draws: the first 5 only beside connections,
+        // every one elsewhere.
+        let sobol = |scene: &pt_render::Scene, backend| StrategyId::SobolSwitched.strategy().flags_for(scene, backend);
+        assert_eq!(sobol(&small, gpu) & FLAG_SOBOL_DEEP, 0);
+        assert_ne!(sobol(&large, cpu) & FLAG_SOBOL_DEEP, 0);
     }
 
     #[test]

@@ -251,11 +251,13 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          the default and make nearly the same image (MIS here, other samples per frame on the CPU) come within \
          the machine's noise of it, and the lowest median can be either; the test that separates a real \
          difference from noise is run for run: alternatives faster than the default in every seed, {verdict}.\n\n\
-         - Samples: Owen-scrambled Sobol (Burley 2020) for the first 5 draws of a path (pixel, then light \
-         and BSDF samples of two vertices), an independent PCG stream for later ones. Independent PCG \
-         samples throughout: {}; Sobol for every draw: {}. Deep in a path each Sobol pair is stratified alone, \
-         not jointly with the earlier ones, and gains little, while a Sobol draw costs four times the integer \
-         multiplies of a PCG draw (`SOBOL_DRAWS` in pt-core gives the choice of 5).\n\
+         - Samples: Owen-scrambled Sobol (Burley 2020) for every draw of a path where connections are on; \
+         elsewhere for the first 5 draws (pixel, then light and BSDF samples of two vertices), an independent \
+         PCG stream for later ones. Independent PCG samples throughout: {}; Sobol draws switched: {}. Without \
+         connections, deep in a path each Sobol pair is stratified alone, not jointly with the earlier ones, \
+         and gains little, while a Sobol draw costs four times the integer multiplies of a PCG draw \
+         (`SOBOL_DRAWS` in pt-core gives the choice of 5); a connection draws four more numbers per vertex, \
+         and with it Sobol for every draw reached relMSE 1e-3 sooner on every scene of the suite.\n\
          - Russian roulette from bounce 5, i.e. none within the default 5 bounces. From bounce 3: {}; from \
          bounce 1: {}. Its random cut-offs undo part of Sobol's stratification; it stays for deeper bounce \
          limits, where it bounds path length.\n\
@@ -271,7 +273,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          budget.\n\
          - NEE without MIS: after a bounce, light is gathered by shadow rays only, and a BSDF ray that \
          hits the light adds nothing. NEE with MIS: {}; BSDF sampling alone: {}. The light is small here \
-         (sin a = 0.09 from the floor): the cosine lobe rarely finds it and the glow lobe leaves its cone to \
+         (sin a = 0.09 from the floor): the cosine lobe rarely finds it and the glow lobe, where on, leaves its cone to \
          NEE, so MIS gives NEE nearly all the weight and both make the same image (the relMSE at 512 spp \
          above agrees to 3 digits). MIS then only adds work, a BSDF density and a weight per shadow ray, \
          and the two are a near tie that the cheaper one should win. MIS stays available (`FLAG_MIS`, the \
@@ -284,15 +286,17 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          carries the exact unoccluded estimate (`LightCone::sample_projected`) and only shadow edges are \
          noisy. Uniform in the cone everywhere instead: {}. Vertices whose cone crosses the horizon sample it \
          uniformly.\n\
-         - BSDF sampling: the cosine lobe mixed with the glow lobe around the light (probability 0.25, reach \
-         0.125 in 1 - cos past the light's cone, density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` \
-         in pt-core; probability 0.1 around large lights and in bright rooms, `FLAG_GLOW_SPARSE`). Cosine lobe \
-         alone: {}; probability 0.1 here: {}. Nearly all of the remaining error is indirect light, and much of it comes from the bright ceiling \
-         right above the light, which the cosine lobe finds rarely. The glow lobe's density falls as the \
-         inverse square of the distance from the light, as the irradiance of surfaces around it does. (Not \
-         measured by this bench: on the CPU at 256x256 and 64 spp, direct light alone, `render --max-bounces 1`, \
-         has relMSE 3.5e-5 against an 8192-spp render of its own, and all 5 bounces 1.6e-3 against the \
-         reference above; `pathtracer compare` gives both.)\n\
+         - Connections through lit wall points (docs/ARCHITECTURE.md) where no wall can shadow the light: \
+         each vertex also reaches the light through a wall point picked as the light would light it, weighed \
+         by the power heuristic against the BSDF ray that could have found it. Connections off, with the glow \
+         lobe in their place and Sobol for the first 5 draws: {}; the glow lobe beside them: {}. Nearly all of \
+         the error left after NEE is indirect light, much of it from the bright patch of ceiling right above \
+         the light, which the cosine lobe finds rarely and a connection finds by construction. Where they are \
+         off (a wall that can shadow the light; large lights on the CPU), BSDF sampling mixes the cosine lobe \
+         with the glow lobe around the light (probability 0.25, reach 0.125 in 1 - cos past the light's cone, \
+         density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` in pt-core; probability 0.1 around large \
+         lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
+         distance from the light, as the irradiance of surfaces around it does.\n\
          - Trace kernel: the small-scene kernel on CPU adapters (lavapipe), for scenes it holds (at most 8 \
          walls and 4 spheres, and no wall that can block a shadow ray: the default scene is one); the general \
          kernel on GPUs and for other scenes. Both make the same image, bit for bit on lavapipe. The throughput \
@@ -307,7 +311,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \
          workgroup fills half of a 32-wide warp.\n",
         vs_default(StrategyId::Independent),
-        vs_default(StrategyId::SobolEverywhere),
+        vs_default(StrategyId::SobolSwitched),
         vs_default(StrategyId::RrFrom3),
         vs_default(StrategyId::RrFrom1),
         ratio(StrategyId::RrFrom3Luminance.name(), StrategyId::RrFrom3.name()),
@@ -316,7 +320,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
         vs_default(StrategyId::NeeMis),
         vs_default(StrategyId::BsdfOnly),
         vs_default(StrategyId::NeeUniform),
-        vs_default(StrategyId::GlowOff),
+        vs_default(StrategyId::ConnectionsSwitched),
         vs_default(StrategyId::GlowShareSwitched),
     )
 }

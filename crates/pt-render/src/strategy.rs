@@ -37,21 +37,34 @@
 //! - the CPU's eight lanes take a logarithm only where a lane picks the
 //!   lobe, and there the connections' extra rays cost more than they save
 //!   around large lights (1.2x to 1.7x the lobe's time to 1e-3), while
-//!   around small lights they still win (0.72x to 0.83x): they take the
-//!   lobe's place where it would take a quarter of the samples
-//!   ([`glow_pays`]).
+//!   around small lights they still win (0.72x to 0.83x, and 0.90x in the
+//!   bright room): they take the lobe's place where the light looks small
+//!   from the room ([`GLOW_MAX_EXTENT`]).
+//!
+//! With connections on, two more choices follow:
+//! - every draw of a path comes from the Sobol sequence
+//!   (`FLAG_SOBOL_DEEP`): a connection draws four more numbers per vertex
+//!   (a direction about the light's centre, a light sample at the wall
+//!   point), so the first five Sobol draws no longer reach past the first
+//!   vertex; with connections, Sobol for every draw took 0.86x to 0.99x
+//!   the time of the first five alone to relMSE 1e-3 on every scene of the
+//!   suite on lavapipe, and 0.93x to 0.99x on the CPU around its small
+//!   lights (medians of 5 seeds, 2 on four scenes);
+//! - a light in a corner or against an edge, within [`CORNER_CLEARANCE`]
+//!   radii of two walls or more ([`walls_beside_light`]), keeps the glow
+//!   lobe beside the connections ([`CORNER_WALLS`]).
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
 //! wall shadows the light ([`connections_apply`]), and large lights on the
-//! CPU. (docs/ARCHITECTURE.md, "Connections through lit wall points", has
-//! the measurements.)
+//! CPU ([`connections_pay`]). (docs/ARCHITECTURE.md, "Connections through
+//! lit wall points", has the measurements.)
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.
 
 use pt_core::glam::Vec3;
 use pt_core::light::light_cone;
-use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAGS_DEFAULT};
+use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
 
 use crate::scene::Scene;
 
@@ -98,6 +111,31 @@ pub const GLOW_MAX_ALBEDO: f32 = 0.75;
 /// from the floor) takes 1.22x as long on lavapipe.
 pub const GLOW_MAX_CLEARANCE: f32 = 2.0;
 
+/// The largest gap, in light radii, between the light and a wall that
+/// counts as beside it ([`walls_beside_light`]). The lights of the suite
+/// and the held-out scenes have gaps of at most 1 radius or at least 1.5:
+/// the bound sits between, clear of the default light's 1 radius below
+/// the ceiling.
+pub const CORNER_CLEARANCE: f32 = 1.25;
+
+/// How many walls beside the light make a corner or an edge, where the
+/// glow lobe stays on beside the connections. A light there sends most of
+/// its power to the walls right beside it: 62% of the directions from the
+/// centre of the corner light of the suite (radius 0.12, half a radius
+/// from three walls) meet a wall within 3 radii, against 25% for a light
+/// as near one wall (the near-wall light, radius 0.1). Measured with
+/// `pathtracer bench convergence --suite` at 128x128 (time to relMSE 1e-3,
+/// median of 5 seeds, before every draw came from the Sobol sequence): on
+/// the corner light, connections alone took 2.4x the time of connections
+/// with the glow lobe on lavapipe and 2.3x on the CPU (the glow lobe alone:
+/// 1.9x and 1.2x), while around the small lights beside one wall or none
+/// adding the lobe cost 1.03x to 1.34x on lavapipe and 1.16x to 1.52x on
+/// the CPU. The suite's other light beside two or more walls, radius 0.5
+/// below the ceiling (within a radius of the ceiling and three walls),
+/// takes the lobe at a tenth: 0.90x the time of connections alone on
+/// lavapipe, within its seeds' spread.
+pub const CORNER_WALLS: usize = 2;
+
 /// Sample points per wall edge and per sphere for [`light_extent`].
 const GRID: u32 = 16;
 
@@ -142,10 +180,21 @@ pub fn light_extent(scene: &Scene) -> f32 {
 /// surface and the nearest point of any wall, in light radii (0 where it
 /// touches or crosses one, infinite in a scene without walls).
 pub fn light_clearance(scene: &Scene) -> f32 {
+    wall_clearances(scene).fold(f32::INFINITY, f32::min)
+}
+
+/// How many walls come within [`CORNER_CLEARANCE`] light radii of the
+/// light's surface: 2 or more for a light in a corner or against an edge.
+pub fn walls_beside_light(scene: &Scene) -> usize {
+    wall_clearances(scene).filter(|&c| c <= CORNER_CLEARANCE).count()
+}
+
+/// The gap between the light's surface and the nearest point of each
+/// wall, in light radii (0 where the light touches or crosses it).
+fn wall_clearances(scene: &Scene) -> impl Iterator<Item = f32> + '_ {
     let light = scene.light;
     let c = light.center;
-    let nearest = scene.walls.iter().map(|w| (nearest_on_wall(&w.wall, c) - c).length()).fold(f32::INFINITY, f32::min);
-    (nearest - light.radius).max(0.0) / light.radius
+    scene.walls.iter().map(move |w| ((nearest_on_wall(&w.wall, c) - c).length() - light.radius).max(0.0) / light.radius)
 }
 
 /// The point of parallelogram `wall` nearest to `p`: its projection onto
@@ -205,13 +254,26 @@ pub enum Backend {
 /// The integrator flags `scene` renders with on `backend` unless told
 /// otherwise: the glow-lobe rule ([`glow_flags`]), with connections instead
 /// of the glow lobe where they apply ([`connections_apply`]) and pay on
-/// the backend (everywhere on a GPU, around small lights on the CPU). The
+/// the backend (everywhere on a GPU, around small lights on the CPU,
+/// [`connections_pay`]). With connections every draw comes from the Sobol
+/// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
+/// edge keeps the glow lobe beside them ([`walls_beside_light`]). The
 /// glow lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it,
 /// so that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
     let glow = glow_flags(scene);
-    let pays = backend == Backend::Gpu || glow_pays(scene);
-    if pays && connections_apply(scene) { with_connections(glow) } else { glow }
+    if !(connections_pay(scene, backend) && connections_apply(scene)) {
+        return glow;
+    }
+    let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
+    if walls_beside_light(scene) >= CORNER_WALLS { connected | FLAG_GLOW } else { connected }
+}
+
+/// Whether connections pay on `backend` where they apply: on a GPU around
+/// every light; on the CPU around a light that looks small from the room
+/// ([`GLOW_MAX_EXTENT`]), whatever the room's albedo.
+pub fn connections_pay(scene: &Scene, backend: Backend) -> bool {
+    backend == Backend::Gpu || light_extent(scene) <= GLOW_MAX_EXTENT
 }
 
 /// `flags` with connections in the glow lobe's place.
@@ -314,7 +376,7 @@ mod tests {
         // And, with connections instead of the lobe, the frame parameters'
         // default.
         let st = large.render;
-        assert_eq!(large.frame_params(&st, 1, 0).flags, with_connections(sparse()));
+        assert_eq!(large.frame_params(&st, 1, 0).flags, with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
     }
 
     #[test]
@@ -411,10 +473,14 @@ mod tests {
                 if path.extension().is_some_and(|e| e == "toml") {
                     let scene = Scene::load(&path).unwrap();
                     assert!(connections_apply(&scene), "{}", path.display());
+                    let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+                    let beside = ["light-corner", "light-large"].contains(&name.as_str());
+                    assert_eq!(walls_beside_light(&scene) >= CORNER_WALLS, beside, "{name}");
                     let glow = glow_flags(&scene);
-                    assert_eq!(default_flags(&scene, Backend::Gpu), with_connections(glow), "{}", path.display());
-                    let cpu = if glow_pays(&scene) { with_connections(glow) } else { glow };
-                    assert_eq!(default_flags(&scene, Backend::Cpu), cpu, "{}", path.display());
+                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if beside { FLAG_GLOW } else { 0 };
+                    assert_eq!(default_flags(&scene, Backend::Gpu), connected, "{name}");
+                    let cpu = if light_extent(&scene) <= GLOW_MAX_EXTENT { connected } else { glow };
+                    assert_eq!(default_flags(&scene, Backend::Cpu), cpu, "{name}");
                     seen += 1;
                 }
             }
@@ -439,10 +505,42 @@ mod tests {
         assert_eq!(default_flags(&bare, Backend::Gpu), glow_flags(&bare));
         // The default scene's small light: connections on both backends;
         // a large light: on a GPU only.
-        assert_eq!(default_flags(&default, Backend::Cpu), with_connections(FLAGS_DEFAULT));
+        assert_eq!(default_flags(&default, Backend::Cpu), with_connections(FLAGS_DEFAULT) | FLAG_SOBOL_DEEP);
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
-        assert_eq!(default_flags(&large, Backend::Gpu), with_connections(sparse()));
+        assert_eq!(default_flags(&large, Backend::Gpu), with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
         assert_eq!(default_flags(&large, Backend::Cpu), sparse());
+        // The bright room's small light: connections on both backends,
+        // with the glow rule's tenth share bit and MIS.
+        let mut bright = default.clone();
+        for w in &mut bright.walls {
+            w.wall.albedo = Vec3::splat(0.9);
+        }
+        assert!(!glow_pays(&bright));
+        assert_eq!(default_flags(&bright, Backend::Cpu), with_connections(sparse()) | FLAG_SOBOL_DEEP);
+    }
+
+    #[test]
+    fn walls_beside_the_light_make_a_corner_or_an_edge() {
+        // The default light, one radius below the ceiling: the ceiling is
+        // beside it.
+        let default = Scene::default_scene();
+        assert_eq!(walls_beside_light(&default), 1);
+        assert_eq!(default_flags(&default, Backend::Gpu) & FLAG_GLOW, 0);
+        // Moved half a radius from the right wall too: an edge, and the
+        // glow lobe joins the connections on both backends.
+        let edge = with_light(0.15, Vec3::new(1.0 - 0.225, 1.7, 0.0));
+        assert_eq!(walls_beside_light(&edge), 2);
+        for backend in [Backend::Gpu, Backend::Cpu] {
+            assert_eq!(default_flags(&edge, backend), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
+        }
+        // 1.3 radii from the right wall: one wall again.
+        let off = with_light(0.15, Vec3::new(1.0 - 0.345, 1.7, 0.0));
+        assert_eq!(walls_beside_light(&off), 1);
+        // Half a radius from the ceiling, the right and the back walls.
+        let corner = with_light(0.12, Vec3::new(0.82, 1.82, -0.82));
+        assert_eq!(walls_beside_light(&corner), 3);
+        // The nearest wall's gap is the clearance.
+        assert!((light_clearance(&corner) - 0.5).abs() < 1e-4);
     }
 
     #[test]
