@@ -46,10 +46,8 @@
 //!   (`FLAG_SOBOL_DEEP`): a connection draws four more numbers per vertex
 //!   (a direction about the light's centre, a light sample at the wall
 //!   point), so the first five Sobol draws no longer reach past the first
-//!   vertex; with connections, Sobol for every draw took 0.86x to 0.99x
-//!   the time of the first five alone to relMSE 1e-3 on every scene of the
-//!   suite on lavapipe, and 0.93x to 0.99x on the CPU around its small
-//!   lights (medians of 5 seeds, 2 on four scenes);
+//!   vertex, and with connections Sobol for every draw reached relMSE
+//!   1e-3 sooner on every scene of the suite, on both backends;
 //! - a light in a corner or against an edge, within [`CORNER_CLEARANCE`]
 //!   radii of two walls or more ([`walls_beside_light`]), keeps the glow
 //!   lobe beside the connections ([`CORNER_WALLS`]).
@@ -120,20 +118,13 @@ pub const CORNER_CLEARANCE: f32 = 1.25;
 
 /// How many walls beside the light make a corner or an edge, where the
 /// glow lobe stays on beside the connections. A light there sends most of
-/// its power to the walls right beside it: 62% of the directions from the
-/// centre of the corner light of the suite (radius 0.12, half a radius
-/// from three walls) meet a wall within 3 radii, against 25% for a light
-/// as near one wall (the near-wall light, radius 0.1). Measured with
-/// `pathtracer bench convergence --suite` at 128x128 (time to relMSE 1e-3,
-/// median of 5 seeds, before every draw came from the Sobol sequence): on
-/// the corner light, connections alone took 2.4x the time of connections
-/// with the glow lobe on lavapipe and 2.3x on the CPU (the glow lobe alone:
-/// 1.9x and 1.2x), while around the small lights beside one wall or none
-/// adding the lobe cost 1.03x to 1.34x on lavapipe and 1.16x to 1.52x on
-/// the CPU. The suite's other light beside two or more walls, radius 0.5
-/// below the ceiling (within a radius of the ceiling and three walls),
-/// takes the lobe at a tenth: 0.90x the time of connections alone on
-/// lavapipe, within its seeds' spread.
+/// its power to the walls right beside it (62% of the directions from the
+/// centre of the suite's corner light meet a wall within 3 radii, against
+/// 25% beside one wall), and on the suite the corner light reached relMSE
+/// 1e-3 more than twice as fast on both backends with the lobe beside the
+/// connections, while around small lights beside one wall or none the
+/// lobe only cost time (docs/ARCHITECTURE.md, "Per-scene defaults", has
+/// the figures).
 pub const CORNER_WALLS: usize = 2;
 
 /// Sample points per wall edge and per sphere for [`light_extent`].
