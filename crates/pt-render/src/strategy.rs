@@ -50,7 +50,13 @@
 //!   1e-3 sooner on every scene of the suite, on both backends;
 //! - a light in a corner or against an edge, within [`CORNER_CLEARANCE`]
 //!   radii of two walls or more ([`walls_beside_light`]), keeps the glow
-//!   lobe beside the connections ([`CORNER_WALLS`]).
+//!   lobe beside the connections ([`CORNER_WALLS`]), and so does a light
+//!   that looks large from the room (above [`GLOW_MAX_EXTENT`], which
+//!   only a GPU connects around), at the tenth share the glow rule gives
+//!   it: there connections cut the error least, since the light's
+//!   surroundings are no brighter than the rest of the room, and on
+//!   lavapipe the lobe costs no time beside them (every lane runs the
+//!   code of both, whichever the flags switch on).
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
 //! wall shadows the light ([`connections_apply`]), and large lights on the
@@ -248,7 +254,8 @@ pub enum Backend {
 /// the backend (everywhere on a GPU, around small lights on the CPU,
 /// [`connections_pay`]). With connections every draw comes from the Sobol
 /// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
-/// edge keeps the glow lobe beside them ([`walls_beside_light`]). The
+/// edge ([`walls_beside_light`]) or a large one ([`GLOW_MAX_EXTENT`])
+/// keeps the glow lobe beside them. The
 /// glow lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it,
 /// so that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
@@ -257,7 +264,8 @@ pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
         return glow;
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
-    if walls_beside_light(scene) >= CORNER_WALLS { connected | FLAG_GLOW } else { connected }
+    let keep_lobe = walls_beside_light(scene) >= CORNER_WALLS || light_extent(scene) > GLOW_MAX_EXTENT;
+    if keep_lobe { connected | FLAG_GLOW } else { connected }
 }
 
 /// Whether connections pay on `backend` where they apply: on a GPU around
@@ -467,8 +475,9 @@ mod tests {
                     let name = path.file_stem().unwrap().to_string_lossy().into_owned();
                     let beside = ["light-corner", "light-large"].contains(&name.as_str());
                     assert_eq!(walls_beside_light(&scene) >= CORNER_WALLS, beside, "{name}");
+                    let lobe = beside || light_extent(&scene) > GLOW_MAX_EXTENT;
                     let glow = glow_flags(&scene);
-                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if beside { FLAG_GLOW } else { 0 };
+                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if lobe { FLAG_GLOW } else { 0 };
                     assert_eq!(default_flags(&scene, Backend::Gpu), connected, "{name}");
                     let cpu = if light_extent(&scene) <= GLOW_MAX_EXTENT { connected } else { glow };
                     assert_eq!(default_flags(&scene, Backend::Cpu), cpu, "{name}");
@@ -500,6 +509,14 @@ mod tests {
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
         assert_eq!(default_flags(&large, Backend::Gpu), with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
         assert_eq!(default_flags(&large, Backend::Cpu), sparse());
+        // A large light in the open, beside no wall: the glow rule has no
+        // lobe there, and a GPU puts it beside the connections at a tenth.
+        let open = with_light(0.25, Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(walls_beside_light(&open), 0);
+        assert!(light_extent(&open) > GLOW_MAX_EXTENT);
+        assert_eq!(glow_flags(&open), in_the_open());
+        assert_eq!(default_flags(&open, Backend::Gpu), with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
+        assert_eq!(default_flags(&open, Backend::Cpu), in_the_open());
         // The bright room's small light: connections on both backends,
         // with the glow rule's tenth share bit and MIS.
         let mut bright = default.clone();
