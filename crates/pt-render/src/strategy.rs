@@ -223,7 +223,12 @@ fn nearest_on_wall(wall: &pt_core::Wall, p: Vec3) -> Vec3 {
 /// that looks small from the room ([`GLOW_MAX_EXTENT`]) in a room of
 /// middling albedo ([`GLOW_MAX_ALBEDO`]).
 pub fn glow_pays(scene: &Scene) -> bool {
-    light_extent(scene) <= GLOW_MAX_EXTENT && mean_albedo(scene) <= GLOW_MAX_ALBEDO
+    glow_pays_at(scene, light_extent(scene))
+}
+
+/// [`glow_pays`] for a light of extent `extent` ([`light_extent`]).
+fn glow_pays_at(scene: &Scene, extent: f32) -> bool {
+    extent <= GLOW_MAX_EXTENT && mean_albedo(scene) <= GLOW_MAX_ALBEDO
 }
 
 /// The area-weighted mean albedo (mean of the three channels) of the
@@ -259,20 +264,25 @@ pub enum Backend {
 /// glow lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it,
 /// so that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
-    let glow = glow_flags(scene);
-    if !(connections_pay(scene, backend) && connections_apply(scene)) {
+    // The extent, a cone per grid point (1,792 in the default scene),
+    // decides three things here: worked out once.
+    let extent = light_extent(scene);
+    let glow = glow_rule(scene, extent);
+    let large = extent > GLOW_MAX_EXTENT;
+    if !(connections_pay(large, backend) && connections_apply(scene)) {
         return glow;
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
-    let keep_lobe = walls_beside_light(scene) >= CORNER_WALLS || light_extent(scene) > GLOW_MAX_EXTENT;
+    let keep_lobe = large || walls_beside_light(scene) >= CORNER_WALLS;
     if keep_lobe { connected | FLAG_GLOW } else { connected }
 }
 
 /// Whether connections pay on `backend` where they apply: on a GPU around
 /// every light; on the CPU around a light that looks small from the room
-/// ([`GLOW_MAX_EXTENT`]), whatever the room's albedo.
-pub fn connections_pay(scene: &Scene, backend: Backend) -> bool {
-    backend == Backend::Gpu || light_extent(scene) <= GLOW_MAX_EXTENT
+/// (extent at most [`GLOW_MAX_EXTENT`]: not `large_light`), whatever the
+/// room's albedo.
+fn connections_pay(large_light: bool, backend: Backend) -> bool {
+    backend == Backend::Gpu || !large_light
 }
 
 /// `flags` with connections in the glow lobe's place.
@@ -298,7 +308,12 @@ pub fn connections_apply(scene: &Scene) -> bool {
 /// the glow lobe at a tenth (`FLAG_GLOW_SPARSE`) where the light is within
 /// [`GLOW_MAX_CLEARANCE`] radii of a wall, and without it farther out.
 pub fn glow_flags(scene: &Scene) -> u32 {
-    if glow_pays(scene) {
+    glow_rule(scene, light_extent(scene))
+}
+
+/// [`glow_flags`] for a light of extent `extent` ([`light_extent`]).
+fn glow_rule(scene: &Scene, extent: f32) -> u32 {
+    if glow_pays_at(scene, extent) {
         FLAGS_DEFAULT
     } else if light_clearance(scene) <= GLOW_MAX_CLEARANCE {
         sparse()
