@@ -290,6 +290,20 @@ impl Scene {
     /// with the GPU's default flags: a CPU render that wants its own sets
     /// `flags` to `default_flags(Backend::Cpu)`.
     pub fn frame_params(&self, settings: &RenderSettings, samples_per_frame: u32, seed: u32) -> FrameParams {
+        let flags = self.default_flags(crate::strategy::Backend::Gpu);
+        self.frame_params_with_flags(settings, samples_per_frame, seed, flags)
+    }
+
+    /// [`Scene::frame_params`] with integrator `flags` of the caller's
+    /// choosing (the viewer's switches), without working out the default
+    /// ones, which take a pass over the scene's surfaces.
+    pub fn frame_params_with_flags(
+        &self,
+        settings: &RenderSettings,
+        samples_per_frame: u32,
+        seed: u32,
+        flags: u32,
+    ) -> FrameParams {
         FrameParams {
             camera: self.camera.to_gpu(settings.width, settings.height),
             light: self.light,
@@ -305,7 +319,7 @@ impl Scene {
             wall_count: self.walls.len() as u32,
             sphere_count: self.spheres.len() as u32,
             tonemap: TONEMAP_ACES,
-            flags: self.default_flags(crate::strategy::Backend::Gpu),
+            flags,
             sample_offset: 0,
             tile: Tile::whole(settings.width, settings.height),
         }

@@ -93,8 +93,7 @@ impl ViewSettings {
             rr_start: self.rr_start,
             spp: 1,
         };
-        let mut p = self.scene.frame_params(&render, 1, 0);
-        p.flags = self.flags;
+        let mut p = self.scene.frame_params_with_flags(&render, 1, 0, self.flags);
         p.exposure = self.exposure;
         p.tonemap = self.tonemap;
         p
