@@ -276,12 +276,21 @@ pub struct Surface {
 /// cost the CPU renderer a quarter of its speed.
 #[inline(always)]
 pub fn surface(geometry: &Geometry, hit: &Hit, ray: &Ray) -> Surface {
+    let i = hit.index as usize;
+    surface_of(hit, ray, || geometry.walls[i], || geometry.spheres[i])
+}
+
+/// [`surface`] with the object hit read by `wall` (a wall hit) or `sphere`
+/// (a sphere hit), whichever the hit's kind calls for: a scene stored
+/// another way supplies its own reads.
+#[inline(always)]
+pub fn surface_of(hit: &Hit, ray: &Ray, wall: impl Fn() -> Wall, sphere: impl Fn() -> Sphere) -> Surface {
     if hit.kind == HitKind::Wall {
-        let w = geometry.walls[hit.index as usize];
+        let w = wall();
         let magnitude = ray.origin.abs() + (ray.dir * hit.t).abs();
         Surface { point: ray.at(hit.t), normal: w.normal, albedo: w.albedo, magnitude, wall: hit.index }
     } else {
-        let s = geometry.spheres[hit.index as usize];
+        let s = sphere();
         let (point, normal) = sphere_hit_point(s.center, s.radius, ray, hit.t);
         Surface { point, normal, albedo: s.albedo, magnitude: s.center.abs() + Vec3::splat(s.radius), wall: NO_WALL }
     }

@@ -24,7 +24,7 @@
 
 use crate::geometry::Geometry;
 use crate::params::FrameParams;
-use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface};
+use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface_of};
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::wall::Wall;
@@ -51,12 +51,22 @@ fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
     calls!(0 1 2 3 4 5 6 7);
 }
 
+/// `items[index]` for an index below `N`, read at constant indices only
+/// (`items[0]` for any other index).
+#[inline(always)]
+fn pick<T: Copy, const N: u32, const L: usize>(items: &[T; L], index: u32) -> T {
+    let mut item = items[0];
+    unrolled::<N>(|i| {
+        if i == index {
+            item = items[i as usize];
+        }
+    });
+    item
+}
+
 /// The first `W` walls and `S` spheres of a scene (`W` at most 8, `S` at
-/// most 4), with the counts in use. Built once per pixel and frame. Shading
-/// data is read from the scene itself, at the hit's index: once per path
-/// vertex, against many tests per ray.
-pub struct SmallScene<'a, const W: u32, const S: u32> {
-    geometry: &'a Geometry,
+/// most 4), with the counts in use. Built once per pixel and frame.
+pub struct SmallScene<const W: u32, const S: u32> {
     /// Slots past `W` and `S` are never read, and the compiler drops them.
     walls: [Wall; MAX_WALLS as usize],
     spheres: [Sphere; MAX_SPHERES as usize],
@@ -78,7 +88,7 @@ pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> 
     SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size))
 }
 
-impl<'a, const W: u32, const S: u32> SmallScene<'a, W, S> {
+impl<const W: u32, const S: u32> SmallScene<W, S> {
     /// Whether this capacity renders the scene exactly as the general
     /// loops: it holds every wall and sphere, and no wall can block a
     /// shadow ray (which is what a closed room with the light inside gives),
@@ -89,12 +99,11 @@ impl<'a, const W: u32, const S: u32> SmallScene<'a, W, S> {
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
     /// capacity are clamped: the caller checks [`SmallScene::fits`].
-    pub fn new(params: &FrameParams, geometry: &'a Geometry) -> Self {
+    pub fn new(params: &FrameParams, geometry: &Geometry) -> Self {
         const { assert!(W <= MAX_WALLS && S <= MAX_SPHERES) };
         let w = &geometry.walls;
         let s = &geometry.spheres;
         Self {
-            geometry,
             walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
             spheres: [s[0], s[1], s[2], s[3]],
             wall_count: params.wall_count.min(W),
@@ -103,7 +112,7 @@ impl<'a, const W: u32, const S: u32> SmallScene<'a, W, S> {
     }
 }
 
-impl<const W: u32, const S: u32> SmallScene<'_, W, S> {
+impl<const W: u32, const S: u32> SmallScene<W, S> {
     /// The nearest wall hit in (0, `t_max`) but `skip_wall`, unrolled: the
     /// walls' part of `closest_hit`, and alone `first_wall`.
     #[inline(always)]
@@ -118,7 +127,7 @@ impl<const W: u32, const S: u32> SmallScene<'_, W, S> {
     }
 }
 
-impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
+impl<const W: u32, const S: u32> SceneView for SmallScene<W, S> {
     /// The same tests as [`crate::query::closest_hit`], in the same
     /// order, on the copy.
     fn closest_hit(&self, ray: &Ray, params: &FrameParams, skip_wall: u32, t_max: f32) -> Hit {
@@ -144,9 +153,18 @@ impl<const W: u32, const S: u32> SceneView for SmallScene<'_, W, S> {
         blocked
     }
 
+    /// The object hit, picked from the copy by comparing the hit's index
+    /// with each constant index: the buffer read at the hit's index would
+    /// be a gather on lavapipe, at two hits (the path's and a
+    /// connection's) in every pass of the path loop.
     #[inline(always)]
     fn surface(&self, hit: &Hit, ray: &Ray) -> Surface {
-        surface(self.geometry, hit, ray)
+        surface_of(
+            hit,
+            ray,
+            || pick::<Wall, W, { MAX_WALLS as usize }>(&self.walls, hit.index),
+            || pick::<Sphere, S, { MAX_SPHERES as usize }>(&self.spheres, hit.index),
+        )
     }
 }
 
@@ -180,6 +198,16 @@ mod tests {
             Sphere::new(v(0.6, 1.5, -0.6), 0.2, a),
             Sphere::new(v(-0.6, 1.2, 0.5), 0.1, a),
         ];
+        // Each object its own albedo, so that shading data read from the
+        // wrong one shows.
+        let mut all_walls = all_walls;
+        for (k, w) in all_walls.iter_mut().enumerate() {
+            w.albedo = Vec3::new(0.1 * k as f32, 0.5, 0.9);
+        }
+        let mut all_spheres = all_spheres;
+        for (k, s) in all_spheres.iter_mut().enumerate() {
+            s.albedo = Vec3::new(0.9, 0.1 * k as f32, 0.5);
+        }
         let geometry = Geometry::new(&all_walls[..walls], &all_spheres[..spheres]).unwrap();
         let params = FrameParams {
             light: SphereLight::new(light, 0.15, Vec3::splat(20.0)),
@@ -243,6 +271,7 @@ mod tests {
             };
             let shadow_walls = ShadowWalls::new(&params, &geometry);
             let mut kinds = [0u32; 4];
+            let mut seen = [0u32; 4];
             for i in 0..4000 {
                 let mut r = || rng.next_f32();
                 let (origin, skip) = if i % 2 == 0 || walls == 0 {
@@ -260,6 +289,16 @@ mod tests {
                 let got = small.closest_hit(&ray, &params, skip, f32::MAX);
                 assert_eq!((got.t, got.kind, got.index), (want.t, want.kind, want.index), "{walls} walls, ray {i}");
                 kinds[want.kind as usize] += 1;
+                if want.kind == HitKind::Wall || want.kind == HitKind::Sphere {
+                    // The shading data, picked from the copy, is the scene's own.
+                    let (a, b) = (small.surface(&got, &ray), geometry.surface(&want, &ray));
+                    assert_eq!(
+                        (a.point, a.normal, a.albedo, a.magnitude, a.wall),
+                        (b.point, b.normal, b.albedo, b.magnitude, b.wall),
+                        "{walls} walls, ray {i}"
+                    );
+                    seen[want.kind as usize] |= 1 << want.index;
+                }
                 if fits {
                     let (dir, dist) = light_cone(&params.light, origin).sample(r(), r());
                     let shadow = Ray { origin, dir };
@@ -271,6 +310,9 @@ mod tests {
             // Every kind of hit the scene has was met.
             assert!(kinds[HitKind::Light as usize] > 0 && (walls == 0 || kinds[HitKind::Wall as usize] > 0));
             assert!(spheres == 0 || kinds[HitKind::Sphere as usize] > 0, "{kinds:?}");
+            // Every wall and sphere was hit, so each index's pick was checked.
+            assert_eq!(seen[HitKind::Wall as usize], (1 << walls) - 1, "walls hit");
+            assert_eq!(seen[HitKind::Sphere as usize], (1 << spheres) - 1, "spheres hit");
         }
         // Some shadow rays were blocked, most not.
         assert!(shadow_rays.1 > 100 && shadow_rays.1 < shadow_rays.0 / 2, "{shadow_rays:?}");
