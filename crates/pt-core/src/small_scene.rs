@@ -182,7 +182,7 @@ mod tests {
         let v = Vec3::new;
         let a = Vec3::splat(0.73);
         let [floor, ceiling, back, left, right, front] = crate::test_support::closed_room();
-        let all_walls = [
+        let mut all_walls = [
             floor,
             ceiling,
             back,
@@ -192,7 +192,7 @@ mod tests {
             Wall::new(v(-0.5, 0.2, 0.0), v(0.6, 0.3, 0.0), v(0.0, 0.5, 0.4), a),
             Wall::new(v(0.2, 1.0, -0.5), v(0.5, 0.0, 0.2), v(0.1, 0.4, 0.0), a),
         ];
-        let all_spheres = [
+        let mut all_spheres = [
             Sphere::new(v(-0.45, 0.40, -0.30), 0.40, a),
             Sphere::new(v(0.50, 0.28, 0.35), 0.28, a),
             Sphere::new(v(0.6, 1.5, -0.6), 0.2, a),
@@ -200,11 +200,9 @@ mod tests {
         ];
         // Each object its own albedo, so that shading data read from the
         // wrong one shows.
-        let mut all_walls = all_walls;
         for (k, w) in all_walls.iter_mut().enumerate() {
             w.albedo = Vec3::new(0.1 * k as f32, 0.5, 0.9);
         }
-        let mut all_spheres = all_spheres;
         for (k, s) in all_spheres.iter_mut().enumerate() {
             s.albedo = Vec3::new(0.9, 0.1 * k as f32, 0.5);
         }
