@@ -105,28 +105,27 @@ impl<S: Sampler> Path<S> {
 
         rays.ray();
         let hit = scene.closest_hit(&ray, params, self.skip_wall, T_FAR);
-        if hit.kind == HitKind::Nothing {
+        let missed = hit.kind == HitKind::Nothing;
+        let at_light = hit.kind == HitKind::Light;
+        if missed {
             self.radiance += self.throughput * params.background;
-            return true;
         }
-        if hit.kind == HitKind::Light {
-            // The light emits outward only; from inside it shows nothing.
-            let front = ray.dir.dot(ray.at(hit.t) - light.center) < 0.0;
-            if front {
-                let weight = if self.bounces == 0 || !nee || self.nee_pdf == 0.0 {
-                    // Camera rays, or no NEE could have found this light.
-                    1.0
-                } else if mis {
-                    power_heuristic(self.bsdf_pdf, self.nee_pdf)
-                } else {
-                    // NEE alone accounts for light reached after a bounce.
-                    0.0
-                };
-                self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
-            }
-            return true;
+        // The light emits outward only; from inside it shows nothing.
+        if at_light && ray.dir.dot(ray.at(hit.t) - light.center) < 0.0 {
+            let weight = if self.bounces == 0 || !nee || self.nee_pdf == 0.0 {
+                // Camera rays, or no NEE could have found this light.
+                1.0
+            } else if mis {
+                power_heuristic(self.bsdf_pdf, self.nee_pdf)
+            } else {
+                // NEE alone accounts for light reached after a bounce.
+                0.0
+            };
+            self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
         }
-        if self.bounces >= params.max_bounces {
+        // One return for the three ways a path ends at its hit: each return
+        // costs lavapipe masks on all the code after it.
+        if missed || at_light || self.bounces >= params.max_bounces {
             return true;
         }
 
@@ -176,20 +175,23 @@ impl<S: Sampler> Path<S> {
             let u = self.sampler.next_2d();
             let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
             let cos = n.dot(dir);
+            let shadow = Ray { origin, dir };
+            // Traced whatever the cosine: lavapipe runs the test anyway,
+            // and one branch less is cheaper there.
+            let blocked = scene.occluded(&shadow, params, shadow_walls, wall_index, dist);
             if cos > 0.0 {
-                let shadow = Ray { origin, dir };
                 rays.ray();
-                if !scene.occluded(&shadow, params, shadow_walls, wall_index, dist) {
-                    let value = if projected {
-                        cone.projected_over_pi(n)
-                    } else {
-                        let bsdf = cos * (1.0 / PI);
-                        let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
-                        // f cos / pdf = (albedo / pi) cos / cone_pdf
-                        bsdf * weight / cone_pdf
-                    };
-                    self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
-                }
+            }
+            if cos > 0.0 && !blocked {
+                let value = if projected {
+                    cone.projected_over_pi(n)
+                } else {
+                    let bsdf = cos * (1.0 / PI);
+                    let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
+                    // f cos / pdf = (albedo / pi) cos / cone_pdf
+                    bsdf * weight / cone_pdf
+                };
+                self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
             }
         }
         if connect && self.bounces + 1 < params.max_bounces {
@@ -198,9 +200,10 @@ impl<S: Sampler> Path<S> {
             self.radiance += self.throughput * albedo * through;
         }
 
-        if last && params.background.max_element() == 0.0 {
-            return true;
-        }
+        // Past here a path that ends is only marked `ended` (its state is
+        // then dropped): on lavapipe each early return costs more than the
+        // work it would skip.
+        let mut ended = last && params.background.max_element() == 0.0;
 
         // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
         // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
@@ -211,9 +214,7 @@ impl<S: Sampler> Path<S> {
         let dir = scatter.sample(self.sampler.next_2d());
         let cos = n.dot(dir);
         let pdf = scatter.pdf(dir);
-        if !(cos > 0.0 && pdf > 0.0) {
-            return true;
-        }
+        ended |= !(cos > 0.0 && pdf > 0.0);
         self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
         self.scatter_pdf = pdf;
         self.nee_pdf = cone_pdf;
@@ -230,15 +231,13 @@ impl<S: Sampler> Path<S> {
                 t.max_element()
             };
             let survive = follow.clamp(RR_MIN_SURVIVAL, 1.0);
-            if self.sampler.next_1d() >= survive {
-                return true;
-            }
+            ended |= self.sampler.next_1d() >= survive;
             self.throughput /= survive;
         }
 
         (self.origin, self.dir) = (origin, dir);
         self.skip_wall = wall_index;
-        false
+        ended
     }
 }
 
@@ -290,6 +289,10 @@ fn connection<V: SceneView, C: RayCounter>(
     if hit.kind != HitKind::Wall {
         return Vec3::ZERO;
     }
+    // From here on every step runs whatever the ones before it found, and
+    // `found` says at the end whether the path through `y` carries light:
+    // lavapipe runs both sides of every branch anyway, and each early
+    // return cost it more than the work it would have skipped.
     let wall = scene.surface(&hit, &from_light);
     let y = wall.point;
     // The wall's side toward the light.
@@ -300,37 +303,30 @@ fn connection<V: SceneView, C: RayCounter>(
     let dist = d2.sqrt();
     let dir = to_y / dist;
     let (cos_p, cos_y) = (n.dot(dir), -ny.dot(dir));
-    if !(cos_p > 0.0 && cos_y > 0.0 && pdf_area > 0.0) {
-        return Vec3::ZERO;
-    }
     let cone = light_cone(&light, y);
-    if cone.is_empty() {
-        return Vec3::ZERO;
-    }
+    let facing = cos_p > 0.0 && cos_y > 0.0 && pdf_area > 0.0 && !cone.is_empty();
     let segment = Ray { origin, dir };
-    rays.ray();
-    let hides = crate::sphere::intersect_sphere(light.center, light.radius, &segment, 0.0, dist) < dist;
-    if hides || scene.occluded(&segment, params, shadow_walls, hit.index, dist) {
-        return Vec3::ZERO;
+    if facing {
+        rays.ray();
     }
+    let hides = crate::sphere::intersect_sphere(light.center, light.radius, &segment, 0.0, dist) < dist;
+    let seen = !hides & !scene.occluded(&segment, params, shadow_walls, hit.index, dist);
     let projected = params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(ny);
     let (to_light, light_dist) = if projected { cone.sample_projected(ny, v.x, v.y) } else { cone.sample(v.x, v.y) };
+    // Written so that a NaN direction finds nothing.
     let cos_light = ny.dot(to_light);
-    // Written so that a NaN direction also returns nothing.
-    if cos_light <= 0.0 || cos_light.is_nan() {
-        return Vec3::ZERO;
+    let towards = facing && seen && cos_light > 0.0;
+    if towards {
+        rays.ray();
     }
-    rays.ray();
     let shadow = Ray { origin: offset_origin(y, ny, wall.magnitude), dir: to_light };
-    if scene.occluded(&shadow, params, shadow_walls, hit.index, light_dist) {
-        return Vec3::ZERO;
-    }
+    let found = towards & !scene.occluded(&shadow, params, shadow_walls, hit.index, light_dist);
     let direct = if projected { cone.projected_over_pi(ny) } else { cos_light * (1.0 / PI) / cone.pdf() };
     let bsdf_area = scatter.pdf(dir) * cos_y / d2;
     let weight = power_heuristic(pdf_area, bsdf_area);
     // f(p) cos_p G V / pdf, with f(p) = albedo / pi (albedo applied by the caller).
     let geometry = cos_p * cos_y / (PI * d2 * pdf_area);
-    wall.albedo * light.radiance * (direct * geometry * weight)
+    if found { wall.albedo * light.radiance * (direct * geometry * weight) } else { Vec3::ZERO }
 }
 
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`
