@@ -91,6 +91,13 @@ impl<S: Sampler> Path<S> {
     /// `ShadowWalls::new` of the scene's parameters and geometry. Returns
     /// whether the path has ended; its rays are counted in `rays`
     /// ([`NoRayCount`] in the renderers).
+    ///
+    /// It returns early only before the hit's surface is read (a miss, the
+    /// light, the bounce limit); a path that ends later is marked `ended`
+    /// and runs on, its state then dropped, and the shadow test runs
+    /// whatever the cosine. On lavapipe a return masks all the code after
+    /// it and cost more than the work it skipped (docs/ARCHITECTURE.md,
+    /// "The small-scene kernel").
     pub fn step<V: SceneView, C: RayCounter>(
         &mut self,
         params: &FrameParams,
@@ -123,8 +130,7 @@ impl<S: Sampler> Path<S> {
             };
             self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
         }
-        // One return for the three ways a path ends at its hit: each return
-        // costs lavapipe masks on all the code after it.
+        // One return for the three ways a path ends at its hit.
         if missed || at_light || self.bounces >= params.max_bounces {
             return true;
         }
@@ -176,8 +182,7 @@ impl<S: Sampler> Path<S> {
             let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
             let cos = n.dot(dir);
             let shadow = Ray { origin, dir };
-            // Traced whatever the cosine: lavapipe runs the test anyway,
-            // and one branch less is cheaper there.
+            // Traced whatever the cosine (see above).
             let blocked = scene.occluded(&shadow, params, shadow_walls, wall_index, dist);
             if cos > 0.0 {
                 rays.ray();
@@ -200,9 +205,7 @@ impl<S: Sampler> Path<S> {
             self.radiance += self.throughput * albedo * through;
         }
 
-        // Past here a path that ends is only marked `ended` (its state is
-        // then dropped): on lavapipe each early return costs more than the
-        // work it would skip.
+        // Past here a path that ends is only marked `ended` (see above).
         let mut ended = last && params.background.max_element() == 0.0;
 
         // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
@@ -290,9 +293,9 @@ fn connection<V: SceneView, C: RayCounter>(
         return Vec3::ZERO;
     }
     // From here on every step runs whatever the ones before it found, and
-    // `found` says at the end whether the path through `y` carries light:
-    // lavapipe runs both sides of every branch anyway, and each early
-    // return cost it more than the work it would have skipped.
+    // `found` says at the end whether the path through `y` carries light,
+    // as in `Path::step`; `&`, not `&&`, so that no branch skips a shadow
+    // test.
     let wall = scene.surface(&hit, &from_light);
     let y = wall.point;
     // The wall's side toward the light.
