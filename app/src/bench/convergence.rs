@@ -92,7 +92,7 @@ pub(crate) fn curve(
     until: Until,
 ) -> Result<Vec<Point>> {
     let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
-    params.flags = strategy.flags_for(scene, device.backend());
+    params.flags = strategy.flags_for(scene);
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut r = Renderer::new(device, params, &walls, &spheres)?;
@@ -160,6 +160,11 @@ pub fn convergence(
             name,
             Until::END,
         )?;
+        // And one short render of every other strategy: a GPU driver may
+        // compile a pipeline at its first dispatch (lavapipe does).
+        for st in STRATEGIES.iter().filter(|st| st.id != StrategyId::Default) {
+            curve(*device, scene, settings, st, 99, max_spp.min(4), reference, name, Until::END)?;
+        }
         // Seeds outer, strategies inner: any drift of the machine's speed
         // during the run is spread over all strategies alike.
         for seed in 0..seeds {

@@ -24,7 +24,7 @@ use pt_core::params::{
     FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
-use pt_render::strategy::{Backend, with_connections};
+use pt_render::strategy::with_connections;
 
 /// Which backend a measurement ran on.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -141,20 +141,19 @@ pub struct Strategy {
 }
 
 impl Strategy {
-    /// Its integrator flags on `scene` and `backend`: the scene's own
-    /// default ones there ([`pt_render::Scene::default_flags`]) with this
-    /// strategy's change.
-    pub fn flags_for(&self, scene: &pt_render::Scene, backend: Backend) -> u32 {
-        (self.flags)(scene.default_flags(backend))
+    /// Its integrator flags on `scene`: the scene's own default ones
+    /// ([`pt_render::Scene::default_flags`]) with this strategy's change.
+    pub fn flags_for(&self, scene: &pt_render::Scene) -> u32 {
+        (self.flags)(scene.default_flags())
     }
 
     /// Whether this strategy, not the default itself, renders `scene` just
     /// as the default does (NEE with MIS where the scene's default has
     /// MIS): timing it again would measure only the machine's noise.
-    pub fn same_as_default_on(&self, scene: &pt_render::Scene, backend: Backend) -> bool {
+    pub fn same_as_default_on(&self, scene: &pt_render::Scene) -> bool {
         let d = StrategyId::Default.strategy();
         self.id != StrategyId::Default
-            && self.flags_for(scene, backend) == d.flags_for(scene, backend)
+            && self.flags_for(scene) == d.flags_for(scene)
             && (self.rr_start, self.spp_per_frame) == (d.rr_start, d.spp_per_frame)
     }
 }
@@ -179,7 +178,7 @@ const _: () = assert!(
 pub const STRATEGIES: [Strategy; 14] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: NEE by projected solid angle (no MIS), connections through lit wall points with Sobol for every draw (on the CPU around small lights only; the glow lobe too beside two walls or around large lights) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
+        name: "default: NEE by projected solid angle (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -311,49 +310,39 @@ mod tests {
         let mut open = small.clone();
         open.light.radius = 0.25;
         open.light.center.y = 1.0;
-        // The small light's default has connections on both backends; the
-        // large and open lights' have them on a GPU, and on the CPU the
-        // glow lobe at a tenth and none (the rule in pt_render::strategy);
-        // all but the small light's have MIS.
-        let (gpu, cpu) = (Backend::Gpu, Backend::Cpu);
-        assert_ne!(small.default_flags(gpu) & FLAG_MIS, large.default_flags(gpu) & FLAG_MIS);
-        assert_ne!(large.default_flags(gpu) & FLAG_CONNECT, large.default_flags(cpu) & FLAG_CONNECT);
-        let same = |scene: &pt_render::Scene, backend| {
-            STRATEGIES.iter().filter(|s| s.same_as_default_on(scene, backend)).map(|s| s.id).collect::<Vec<_>>()
+        // The small light's default has connections; the large and open
+        // lights' have the glow lobe at a tenth and none, and MIS (the rule
+        // in pt_render::strategy).
+        assert_ne!(small.default_flags() & FLAG_MIS, large.default_flags() & FLAG_MIS);
+        assert_ne!(small.default_flags() & FLAG_CONNECT, 0);
+        assert_eq!(large.default_flags() & FLAG_CONNECT, 0);
+        let same = |scene: &pt_render::Scene| {
+            STRATEGIES.iter().filter(|s| s.same_as_default_on(scene)).map(|s| s.id).collect::<Vec<_>>()
         };
-        for backend in [gpu, cpu] {
-            assert_eq!(same(&small, backend), [StrategyId::GlowOff]);
-        }
-        // The large lights: on a GPU the glow lobe joins the connections,
-        // at a tenth; on the CPU the open light has none.
-        assert_eq!(same(&open, gpu), [StrategyId::NeeMis]);
-        assert_eq!(same(&open, cpu), [StrategyId::NeeMis, StrategyId::GlowOff]);
-        assert_eq!(same(&large, gpu), [StrategyId::NeeMis]);
-        assert_eq!(same(&large, cpu), [StrategyId::NeeMis]);
+        assert_eq!(same(&small), [StrategyId::GlowOff]);
+        assert_eq!(same(&open), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        assert_eq!(same(&large), [StrategyId::NeeMis]);
         // Switching the share turns the lobe on at the light's share where
         // the default has none, and swaps a quarter and a tenth elsewhere.
-        let switched = |scene: &pt_render::Scene, backend| {
-            pt_core::bsdf::glow_probability(StrategyId::GlowShareSwitched.strategy().flags_for(scene, backend))
+        let switched = |scene: &pt_render::Scene| {
+            pt_core::bsdf::glow_probability(StrategyId::GlowShareSwitched.strategy().flags_for(scene))
         };
-        assert_eq!(pt_core::bsdf::glow_probability(open.default_flags(cpu)), 0.0);
-        assert_eq!(switched(&open, cpu), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
-        assert_eq!(switched(&large, cpu), pt_core::bsdf::GLOW_PROBABILITY);
-        assert_eq!(switched(&large, gpu), pt_core::bsdf::GLOW_PROBABILITY);
-        assert_eq!(switched(&small, gpu), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(pt_core::bsdf::glow_probability(open.default_flags()), 0.0);
+        assert_eq!(switched(&open), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
+        assert_eq!(switched(&large), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(switched(&small), pt_core::bsdf::GLOW_PROBABILITY);
         // Switching the connections gives the glow-lobe rule where the
-        // default has them, and them (with Sobol for every draw) where it
-        // has not.
-        let connections =
-            |scene: &pt_render::Scene, backend| StrategyId::ConnectionsSwitched.strategy().flags_for(scene, backend);
-        assert_eq!(connections(&small, cpu), pt_core::params::FLAGS_DEFAULT);
-        assert_eq!(connections(&large, gpu), large.default_flags(cpu));
-        assert_eq!(connections(&large, cpu), large.default_flags(gpu) & !FLAG_GLOW);
-        assert_eq!(connections(&open, cpu), open.default_flags(gpu) & !FLAG_GLOW);
+        // default has them, and them in the lobe's place (with Sobol for
+        // every draw) where it has not.
+        let connections = |scene: &pt_render::Scene| StrategyId::ConnectionsSwitched.strategy().flags_for(scene);
+        assert_eq!(connections(&small), pt_core::params::FLAGS_DEFAULT);
+        assert_eq!(connections(&large), with_connections(large.default_flags()) | FLAG_SOBOL_DEEP);
+        assert_eq!(connections(&open), open.default_flags() | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // Switching the Sobol draws: the first 5 only beside connections,
         // every one elsewhere.
-        let sobol = |scene: &pt_render::Scene, backend| StrategyId::SobolSwitched.strategy().flags_for(scene, backend);
-        assert_eq!(sobol(&small, gpu) & FLAG_SOBOL_DEEP, 0);
-        assert_ne!(sobol(&large, cpu) & FLAG_SOBOL_DEEP, 0);
+        let sobol = |scene: &pt_render::Scene| StrategyId::SobolSwitched.strategy().flags_for(scene);
+        assert_eq!(sobol(&small) & FLAG_SOBOL_DEEP, 0);
+        assert_ne!(sobol(&large) & FLAG_SOBOL_DEEP, 0);
     }
 
     #[test]

@@ -7,7 +7,6 @@ use anyhow::{Context, Result};
 use pt_render::output::{self, OutputFormat};
 use pt_render::parts;
 use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
-use pt_render::strategy::Backend;
 use pt_render::{Device, GpuContext, RenderSettings};
 
 use super::{load_scene, spp_progress_bar};
@@ -72,10 +71,9 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         },
     };
     let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
-    // The default strategy is the backend's own, except in a split render:
-    // its parts must render alike on whatever machines they run, GPU or
-    // CPU, to make one image, so they all take the GPU's.
-    params.flags = scene.default_flags(if split.is_some() { Backend::Gpu } else { device.backend() });
+    // The default strategy is the same on every backend, so the parts of a
+    // split render, on whatever machines they run, render alike.
+    params.flags = scene.default_flags();
     match args.sampler {
         SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
         SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,

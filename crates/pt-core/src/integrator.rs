@@ -98,7 +98,11 @@ impl<S: Sampler> Path<S> {
     /// whatever the cosine. On lavapipe a return masks all the code after
     /// it and cost more than the work it skipped (docs/ARCHITECTURE.md,
     /// "The small-scene kernel").
-    pub fn step<V: SceneView, C: RayCounter>(
+    ///
+    /// `CONNECT` false leaves the connection's code out, for flags that
+    /// make no connections ([`connects`]): the same path, without code that
+    /// lavapipe would run masked whatever the flags.
+    pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool>(
         &mut self,
         params: &FrameParams,
         scene: &V,
@@ -141,7 +145,7 @@ impl<S: Sampler> Path<S> {
         // camera inside a sphere sees its inside.
         let n = if normal.dot(ray.dir) < 0.0 { normal } else { -normal };
         let origin = offset_origin(p, n, surface.magnitude);
-        let connect = nee && params.flags & FLAG_CONNECT != 0 && shadow_walls.is_empty();
+        let connect = CONNECT && connects(params.flags) && shadow_walls.is_empty();
         // The share of this vertex's direct light this path counts: the
         // rest belongs to the connection from the vertex before, which
         // could have chosen this wall point.
@@ -244,6 +248,13 @@ impl<S: Sampler> Path<S> {
     }
 }
 
+/// Whether integrator `flags` make connections through lit wall points
+/// (where no wall shadows the light): `FLAG_CONNECT`, which needs `FLAG_NEE`.
+#[inline]
+pub fn connects(flags: u32) -> bool {
+    flags & FLAG_NEE != 0 && flags & FLAG_CONNECT != 0
+}
+
 /// A direction uniform over the unit sphere, from `u` in [0, 1)^2.
 #[inline]
 fn uniform_sphere(u: spirv_std::glam::Vec2) -> Vec3 {
@@ -342,22 +353,24 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 /// [`render_pixel`] on a copy of the scene read at constant indices
 /// ([`SmallScene`] of capacity `W` walls and `S` spheres), for a scene that
 /// [`SmallScene::fits`], with the sampler `Smp` fixed at compile time: it
-/// must be the one the flags pick ([`SamplerKind::of`]). The same samples
-/// as [`render_pixel`], faster on lavapipe.
+/// must be the one the flags pick ([`SamplerKind::of`]); and with the
+/// connections' code only where `CONNECT`, which must be true where the
+/// flags make connections ([`connects`]). The same samples as
+/// [`render_pixel`], faster on lavapipe.
 ///
 /// lavapipe runs both sides of every branch, masked, and a loop at least
 /// once: [`render_pixel`]'s choice among three samplers, each with its own
 /// path loop, would run all three loops' set-up and one pass of each loop
 /// body in every invocation (docs/ARCHITECTURE.md, "The small-scene
 /// kernel").
-pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32>(
+pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let scene = SmallScene::<W, S>::new(params, geometry);
-    pixel_samples::<Smp, _, _>(x, y, params, geometry, &scene, &mut NoRayCount)
+    pixel_samples::<Smp, _, _, CONNECT>(x, y, params, geometry, &scene, &mut NoRayCount)
 }
 
 /// The three samplers the path loop can draw from, as the flags pick them:
@@ -402,10 +415,10 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     rays: &mut C,
 ) -> PixelSamples {
     match SamplerKind::of(params.flags) {
-        SamplerKind::Independent => pixel_samples::<Rng, V, C>(x, y, params, geometry, scene, rays),
-        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C>(x, y, params, geometry, scene, rays),
+        SamplerKind::Independent => pixel_samples::<Rng, V, C, true>(x, y, params, geometry, scene, rays),
+        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C, true>(x, y, params, geometry, scene, rays),
         SamplerKind::SobolDeep => {
-            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C>(x, y, params, geometry, scene, rays)
+            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C, true>(x, y, params, geometry, scene, rays)
         }
     }
 }
@@ -416,7 +429,7 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
 /// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
 /// instead of waiting each sample for their longest path. Samples are added
 /// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
-fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter>(
+fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
@@ -433,7 +446,7 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter>(
     let mut s = 0;
     let mut path = Path::<S>::camera(x, y, pixel, s, params);
     while s < params.samples_per_frame {
-        if path.step(params, scene, &shadow_walls, rays) {
+        if path.step::<V, C, CONNECT>(params, scene, &shadow_walls, rays) {
             let l = path.radiance;
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).

@@ -31,14 +31,6 @@ impl Device<'_> {
         }
     }
 
-    /// The kind of backend, which the default strategy depends on.
-    pub fn backend(&self) -> crate::strategy::Backend {
-        match self {
-            Device::Gpu(_) => crate::strategy::Backend::Gpu,
-            Device::Cpu => crate::strategy::Backend::Cpu,
-        }
-    }
-
     /// What renders: the adapter for the GPU, the thread count for the CPU.
     pub fn description(&self) -> String {
         match self {

@@ -287,10 +287,9 @@ impl Scene {
     }
 
     /// The kernel's parameters for frame 0 of a render with `settings`,
-    /// with the GPU's default flags: a CPU render that wants its own sets
-    /// `flags` to `default_flags(Backend::Cpu)`.
+    /// with the scene's default flags.
     pub fn frame_params(&self, settings: &RenderSettings, samples_per_frame: u32, seed: u32) -> FrameParams {
-        let flags = self.default_flags(crate::strategy::Backend::Gpu);
+        let flags = self.default_flags();
         self.frame_params_with_flags(settings, samples_per_frame, seed, flags)
     }
 
@@ -325,11 +324,11 @@ impl Scene {
         }
     }
 
-    /// The integrator flags this scene renders with on `backend` unless
-    /// told otherwise (`strategy::default_flags`: the project's defaults,
-    /// adapted to the size of the light and to the backend).
-    pub fn default_flags(&self, backend: crate::strategy::Backend) -> u32 {
-        crate::strategy::default_flags(self, backend)
+    /// The integrator flags this scene renders with unless told otherwise
+    /// (`strategy::default_flags`: the project's defaults, adapted to the
+    /// light and the room).
+    pub fn default_flags(&self) -> u32 {
+        crate::strategy::default_flags(self)
     }
 
     /// The scene as TOML that [`Scene::from_toml`] reads back unchanged.

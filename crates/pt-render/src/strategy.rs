@@ -26,20 +26,22 @@
 //!
 //! Where no wall can shadow the light (a convex room around it, which is
 //! every scene of the suite), connections through lit wall points
-//! (`FLAG_CONNECT`) take the glow lobe's place: they find the light's
-//! bright surroundings by construction. What they cost depends on the
-//! backend, and so does the default ([`Backend`]):
-//! - on a GPU adapter they take the lobe's place around every light: on
-//!   lavapipe they cost about what the lobe's logarithm and exponential
-//!   cost, which every SIMD lane runs, and they reached relMSE 1e-3 in
-//!   0.19x to 0.84x the glow lobe's time on the seven scenes of the suite
-//!   measured, the tiny light to the light in the middle of the room;
-//! - the CPU's eight lanes take a logarithm only where a lane picks the
-//!   lobe, and there the connections' extra rays cost more than they save
-//!   around large lights (1.2x to 1.7x the lobe's time to 1e-3), while
-//!   around small lights they still win (0.72x to 0.83x, and 0.90x in the
-//!   bright room): they take the lobe's place where the light looks small
-//!   from the room ([`GLOW_MAX_EXTENT`]).
+//! (`FLAG_CONNECT`) take the glow lobe's place around a light that looks
+//! small from the room ([`GLOW_MAX_EXTENT`]): they find the light's bright
+//! surroundings by construction, and there those outshine the rest of the
+//! room. Around a large light its surroundings are no brighter than the
+//! rest of the room, and the connections' extra rays and draws cost more
+//! than they save, on both backends: on the CPU they took 1.2x to 1.7x the
+//! glow lobe's time to relMSE 1e-3 around the suite's large lights, and on
+//! lavapipe, with the kernel's entry points without the connections' code
+//! where a render makes none, 1.24x to 1.54x the glow-lobe rule's time on
+//! the seven lights of radius 0.19 to 0.5. Around the small lights they
+//! won on both (0.72x to 0.90x on the CPU; on lavapipe 0.66x to 0.93x, and
+//! the glow-lobe rule never
+//! reached 1e-3 within twice their time around the tiny light). One small
+//! light goes the other way on lavapipe: the low light in the open beside
+//! the spheres, 1.16x (docs/ARCHITECTURE.md, "Connections through lit wall
+//! points", has the measurements).
 //!
 //! With connections on, two more choices follow:
 //! - every draw of a path comes from the Sobol sequence
@@ -50,18 +52,10 @@
 //!   1e-3 sooner on every scene of the suite, on both backends;
 //! - a light in a corner or against an edge, within [`CORNER_CLEARANCE`]
 //!   radii of two walls or more ([`walls_beside_light`]), keeps the glow
-//!   lobe beside the connections ([`CORNER_WALLS`]), and so does a light
-//!   that looks large from the room (above [`GLOW_MAX_EXTENT`], which
-//!   only a GPU connects around), at the tenth share the glow rule gives
-//!   it: there connections cut the error least, since the light's
-//!   surroundings are no brighter than the rest of the room, and on
-//!   lavapipe the lobe costs no time beside them (every lane runs the
-//!   code of both, whichever the flags switch on).
+//!   lobe beside the connections ([`CORNER_WALLS`]).
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
-//! wall shadows the light ([`connections_apply`]), and large lights on the
-//! CPU ([`connections_pay`]). (docs/ARCHITECTURE.md, "Connections through
-//! lit wall points", has the measurements.)
+//! wall shadows the light ([`connections_apply`]), and large lights.
 //!
 //! Every choice is one of the unbiased configurations the accuracy suite
 //! checks; only the noise differs.
@@ -243,46 +237,25 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
     if area > 0.0 { (weighted / area) as f32 } else { 0.0 }
 }
 
-/// The kind of device a render runs on, as far as the default strategy
-/// depends on it (see the module's documentation).
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// The kernel on a GPU adapter, lavapipe included.
-    Gpu,
-    /// The CPU renderer.
-    Cpu,
-}
-
-/// The integrator flags `scene` renders with on `backend` unless told
-/// otherwise: the glow-lobe rule ([`glow_flags`]), with connections instead
-/// of the glow lobe where they apply ([`connections_apply`]) and pay on
-/// the backend (everywhere on a GPU, around small lights on the CPU,
-/// [`connections_pay`]). With connections every draw comes from the Sobol
+/// The integrator flags `scene` renders with unless told otherwise, on
+/// every backend: the glow-lobe rule ([`glow_flags`]), with connections
+/// instead of the glow lobe where they apply ([`connections_apply`]) and
+/// the light looks small from the room (extent at most
+/// [`GLOW_MAX_EXTENT`]). With connections every draw comes from the Sobol
 /// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
-/// edge ([`walls_beside_light`]) or a large one ([`GLOW_MAX_EXTENT`])
-/// keeps the glow lobe beside them. The
-/// glow lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it,
-/// so that switching the lobe back on gives the share the light calls for.
-pub fn default_flags(scene: &Scene, backend: Backend) -> u32 {
+/// edge ([`walls_beside_light`]) keeps the glow lobe beside them. The glow
+/// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
+/// that switching the lobe back on gives the share the light calls for.
+pub fn default_flags(scene: &Scene) -> u32 {
     // The extent, a cone per grid point (1,792 in the default scene),
-    // decides three things here: worked out once.
+    // decides both rules here: worked out once.
     let extent = light_extent(scene);
     let glow = glow_rule(scene, extent);
-    let large = extent > GLOW_MAX_EXTENT;
-    if !(connections_pay(large, backend) && connections_apply(scene)) {
+    if extent > GLOW_MAX_EXTENT || !connections_apply(scene) {
         return glow;
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
-    let keep_lobe = large || walls_beside_light(scene) >= CORNER_WALLS;
-    if keep_lobe { connected | FLAG_GLOW } else { connected }
-}
-
-/// Whether connections pay on `backend` where they apply: on a GPU around
-/// every light; on the CPU around a light that looks small from the room
-/// (extent at most [`GLOW_MAX_EXTENT`]: not `large_light`), whatever the
-/// room's albedo.
-fn connections_pay(large_light: bool, backend: Backend) -> bool {
-    backend == Backend::Gpu || !large_light
+    if walls_beside_light(scene) >= CORNER_WALLS { connected | FLAG_GLOW } else { connected }
 }
 
 /// `flags` with connections in the glow lobe's place.
@@ -387,10 +360,9 @@ mod tests {
         let radii = [0.02, 0.05, 0.1, 0.2, 0.3, 0.45];
         let e: Vec<f32> = radii.iter().map(|&r| light_extent(&with_light(r, Vec3::new(0.0, 1.0, 0.0)))).collect();
         assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
-        // And, with connections instead of the lobe, the frame parameters'
-        // default.
+        // And the frame parameters' default.
         let st = large.render;
-        assert_eq!(large.frame_params(&st, 1, 0).flags, with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
+        assert_eq!(large.frame_params(&st, 1, 0).flags, sparse());
     }
 
     #[test]
@@ -472,14 +444,16 @@ mod tests {
         assert_eq!(seen, 15);
     }
 
-    /// Connections replace the glow lobe wherever no wall shadows the
-    /// light (every scene of the suite) on a GPU, and on the CPU where the
-    /// lobe would take a quarter of the samples; a partition that can stand
-    /// between the room and the light, a light outside the room, or a scene
-    /// without walls keep the glow-lobe rule on both.
+    /// Connections replace the glow lobe around the small lights wherever
+    /// no wall shadows the light (every scene of the suite), beside the
+    /// lobe in a corner; large lights keep the glow-lobe rule, and so do a
+    /// partition that can stand between the room and the light, a light
+    /// outside the room, and a scene without walls.
     #[test]
-    fn connections_replace_the_glow_lobe_in_rooms_that_do_not_shadow_the_light() {
+    fn connections_replace_the_glow_lobe_around_small_lights_in_rooms_that_do_not_shadow_them() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let small = ["bright-room", "default", "light-corner", "light-low", "light-near-wall", "light-small"];
+        let small = [small.as_slice(), &["light-tiny", "sphere-in-corner"]].concat();
         let mut seen = 0;
         for sub in [dir.clone(), dir.join("holdout")] {
             for entry in std::fs::read_dir(&sub).unwrap() {
@@ -490,12 +464,11 @@ mod tests {
                     let name = path.file_stem().unwrap().to_string_lossy().into_owned();
                     let beside = ["light-corner", "light-large"].contains(&name.as_str());
                     assert_eq!(walls_beside_light(&scene) >= CORNER_WALLS, beside, "{name}");
-                    let lobe = beside || light_extent(&scene) > GLOW_MAX_EXTENT;
+                    let is_small = small.contains(&name.as_str());
+                    assert_eq!(light_extent(&scene) <= GLOW_MAX_EXTENT, is_small, "{name}");
                     let glow = glow_flags(&scene);
-                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if lobe { FLAG_GLOW } else { 0 };
-                    assert_eq!(default_flags(&scene, Backend::Gpu), connected, "{name}");
-                    let cpu = if light_extent(&scene) <= GLOW_MAX_EXTENT { connected } else { glow };
-                    assert_eq!(default_flags(&scene, Backend::Cpu), cpu, "{name}");
+                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if beside { FLAG_GLOW } else { 0 };
+                    assert_eq!(default_flags(&scene), if is_small { connected } else { glow }, "{name}");
                     seen += 1;
                 }
             }
@@ -509,37 +482,31 @@ mod tests {
             wall: pt_core::Wall::new(v(-0.6, 0.0, 0.2), v(0.9, 0.0, -0.6), v(0.0, 1.3, 0.0), Vec3::splat(0.5)),
         });
         assert!(!connections_apply(&partition));
-        for backend in [Backend::Gpu, Backend::Cpu] {
-            assert_eq!(default_flags(&partition, backend), glow_flags(&partition));
-        }
-        assert_eq!(default_flags(&partition, Backend::Gpu) & FLAG_CONNECT, 0);
+        assert_eq!(default_flags(&partition), glow_flags(&partition));
+        assert_eq!(default_flags(&partition) & FLAG_CONNECT, 0);
         let outside = with_light(0.1, Vec3::new(0.0, 1.0, -1.5));
         assert!(!connections_apply(&outside));
         let bare = Scene { walls: Vec::new(), ..default.clone() };
         assert!(!connections_apply(&bare));
-        assert_eq!(default_flags(&bare, Backend::Gpu), glow_flags(&bare));
-        // The default scene's small light: connections on both backends;
-        // a large light: on a GPU only.
-        assert_eq!(default_flags(&default, Backend::Cpu), with_connections(FLAGS_DEFAULT) | FLAG_SOBOL_DEEP);
+        assert_eq!(default_flags(&bare), glow_flags(&bare));
+        // The default scene's small light: connections.
+        assert_eq!(default_flags(&default), with_connections(FLAGS_DEFAULT) | FLAG_SOBOL_DEEP);
+        // A large light: the glow lobe at a tenth, even beside two walls
+        // and a light in the open: none.
         let large = with_light(0.5, Vec3::new(0.0, 1.35, 0.0));
-        assert_eq!(default_flags(&large, Backend::Gpu), with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
-        assert_eq!(default_flags(&large, Backend::Cpu), sparse());
-        // A large light in the open, beside no wall: the glow rule has no
-        // lobe there, and a GPU puts it beside the connections at a tenth.
+        assert!(walls_beside_light(&large) >= CORNER_WALLS);
+        assert_eq!(default_flags(&large), sparse());
         let open = with_light(0.25, Vec3::new(0.0, 1.0, 0.0));
-        assert_eq!(walls_beside_light(&open), 0);
         assert!(light_extent(&open) > GLOW_MAX_EXTENT);
-        assert_eq!(glow_flags(&open), in_the_open());
-        assert_eq!(default_flags(&open, Backend::Gpu), with_connections(sparse()) | FLAG_SOBOL_DEEP | FLAG_GLOW);
-        assert_eq!(default_flags(&open, Backend::Cpu), in_the_open());
-        // The bright room's small light: connections on both backends,
-        // with the glow rule's tenth share bit and MIS.
+        assert_eq!(default_flags(&open), in_the_open());
+        // The bright room's small light: connections, with the glow rule's
+        // tenth share bit and MIS.
         let mut bright = default.clone();
         for w in &mut bright.walls {
             w.wall.albedo = Vec3::splat(0.9);
         }
         assert!(!glow_pays(&bright));
-        assert_eq!(default_flags(&bright, Backend::Cpu), with_connections(sparse()) | FLAG_SOBOL_DEEP);
+        assert_eq!(default_flags(&bright), with_connections(sparse()) | FLAG_SOBOL_DEEP);
     }
 
     #[test]
@@ -548,14 +515,12 @@ mod tests {
         // beside it.
         let default = Scene::default_scene();
         assert_eq!(walls_beside_light(&default), 1);
-        assert_eq!(default_flags(&default, Backend::Gpu) & FLAG_GLOW, 0);
+        assert_eq!(default_flags(&default) & FLAG_GLOW, 0);
         // Moved half a radius from the right wall too: an edge, and the
-        // glow lobe joins the connections on both backends.
+        // glow lobe joins the connections.
         let edge = with_light(0.15, Vec3::new(1.0 - 0.225, 1.7, 0.0));
         assert_eq!(walls_beside_light(&edge), 2);
-        for backend in [Backend::Gpu, Backend::Cpu] {
-            assert_eq!(default_flags(&edge, backend), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
-        }
+        assert_eq!(default_flags(&edge), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // 1.3 radii from the right wall: one wall again.
         let off = with_light(0.15, Vec3::new(1.0 - 0.345, 1.7, 0.0));
         assert_eq!(walls_beside_light(&off), 1);

@@ -8,7 +8,6 @@ use std::sync::{Arc, Mutex};
 use egui::{Event, Key, MouseWheelUnit, Sense};
 use pt_render::gpu::{Blit, GpuTimer, PendingRead};
 use pt_render::scene::CameraDesc;
-use pt_render::strategy::Backend;
 use pt_render::{GpuContext, GpuError, GpuRenderer, Scene, SceneError};
 
 use crate::Instant;
@@ -410,7 +409,7 @@ impl Session {
                 self.settings.max_bounces = scene.render.max_bounces;
                 // The new scene's own default strategy (the panel's switches
                 // show it and can change it again).
-                self.settings.flags = scene.default_flags(Backend::Gpu);
+                self.settings.flags = scene.default_flags();
                 self.settings.scene = scene;
                 self.files.status = format!("loaded {name}");
                 true

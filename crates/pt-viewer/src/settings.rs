@@ -3,7 +3,6 @@
 
 use pt_core::FrameParams;
 use pt_core::params::TONEMAP_ACES;
-use pt_render::strategy::Backend;
 use pt_render::{RenderSettings, Scene};
 
 /// How many samples each frame traces.
@@ -65,7 +64,7 @@ impl ViewSettings {
     pub fn new(scene: Scene, width: u32, height: u32) -> Self {
         let render = scene.render;
         Self {
-            flags: scene.default_flags(Backend::Gpu),
+            flags: scene.default_flags(),
             scene,
             width,
             height,

@@ -55,17 +55,18 @@ fn accumulate_pixel(
 }
 
 /// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
-/// `S` spheres with sampler `Smp`, with the parameters copied into the
-/// invocation's own memory too: lavapipe would otherwise gather each of
-/// them from the buffer at every read.
-fn small<Smp: Sampler, const W: u32, const S: u32>(
+/// `S` spheres with sampler `Smp`, the connections' code only where
+/// `CONNECT`, with the parameters copied into the invocation's own memory
+/// too: lavapipe would otherwise gather each of them from the buffer at
+/// every read.
+fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let params = *params;
-    integrator::render_pixel_small::<Smp, W, S>(x, y, &params, geometry)
+    integrator::render_pixel_small::<Smp, W, S, CONNECT>(x, y, &params, geometry)
 }
 
 macro_rules! accumulate_entry {
@@ -97,14 +98,31 @@ accumulate_entry!(accumulate_16x4_groups, 16, 4);
 accumulate_entry!(accumulate_32x2_groups, 32, 2);
 accumulate_entry!(accumulate_4x4_groups, 4, 4);
 // For scenes that `SmallScene::fits`, one per capacity in
-// `small_scene::SMALL_SCENE_SIZES` and sampler (`integrator::SamplerKind`,
-// in its order): the renderer's choice on lavapipe.
-accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2>);
-accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2>);
-accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4>);
-accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4>);
+// `small_scene::SMALL_SCENE_SIZES`, sampler (`integrator::SamplerKind`, in
+// its order) and with or without the connections' code (`_unconnected`,
+// for flags that make none): the renderer's choice on lavapipe.
+accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2, true>);
+accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected, 8, 8, small::<Rng, 5, 2, false>);
+accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2, true>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected, 8, 8, small::<SobolSampler, 5, 2, false>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2, true>);
+accumulate_entry!(
+    accumulate_small_5w_2s_sobol_deep_unconnected,
+    8,
+    8,
+    small::<SobolSampler<{ u32::MAX }>, 5, 2, false>
+);
+accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4, true>);
+accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected, 8, 8, small::<Rng, 8, 4, false>);
+accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4, true>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected, 8, 8, small::<SobolSampler, 8, 4, false>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4, true>);
+accumulate_entry!(
+    accumulate_small_8w_4s_sobol_deep_unconnected,
+    8,
+    8,
+    small::<SobolSampler<{ u32::MAX }>, 8, 4, false>
+);
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB
 /// (pixel `id` of the tile).

@@ -1,7 +1,7 @@
 //! The kernel module and its compute pipelines.
 
 use pt_core::Geometry;
-use pt_core::integrator::SamplerKind;
+use pt_core::integrator::{SamplerKind, connects};
 use pt_core::small_scene::SMALL_SCENE_SIZES;
 
 use super::KERNEL_SPV;
@@ -46,29 +46,58 @@ impl TraceKernel {
     }
 }
 
+/// What a small-scene entry point compiles in beside its capacity: the
+/// sampler, and whether it has the connections' code.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(super) struct SmallVariant {
+    pub(super) sampler: SamplerKind,
+    pub(super) connect: bool,
+}
+
+impl SmallVariant {
+    /// Every variant, in the kernel's order: samplers in `SamplerKind::ALL`'s
+    /// order, each with then without the connections' code.
+    const ALL: [SmallVariant; 6] = {
+        let k = SamplerKind::ALL;
+        const fn v(sampler: SamplerKind, connect: bool) -> SmallVariant {
+            SmallVariant { sampler, connect }
+        }
+        [v(k[0], true), v(k[0], false), v(k[1], true), v(k[1], false), v(k[2], true), v(k[2], false)]
+    };
+
+    /// The variant integrator `flags` need: their sampler, and the
+    /// connections' code only where they make connections (leaving it out
+    /// where they make none renders the same samples, faster on lavapipe,
+    /// which would run it masked).
+    pub(super) fn of(flags: u32) -> Self {
+        Self { sampler: SamplerKind::of(flags), connect: connects(flags) }
+    }
+}
+
 /// The entry point of the small-scene kernel of capacity (walls, spheres)
-/// with `sampler`.
-pub(super) fn small_scene_entry((walls, spheres): (u32, u32), sampler: SamplerKind) -> String {
-    let sampler = match sampler {
+/// and `variant`.
+pub(super) fn small_scene_entry((walls, spheres): (u32, u32), variant: SmallVariant) -> String {
+    let sampler = match variant.sampler {
         SamplerKind::Independent => "pcg",
         SamplerKind::Sobol => "sobol",
         SamplerKind::SobolDeep => "sobol_deep",
     };
-    format!("accumulate_small_{walls}w_{spheres}s_{sampler}")
+    let connect = if variant.connect { "" } else { "_unconnected" };
+    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{connect}")
 }
 
 /// Index of the small-scene pipeline of capacity `size` (an index in
-/// `SMALL_SCENE_SIZES`) and `sampler` in [`small_scene_entries`]' order.
-pub(super) fn small_scene_index(size: usize, sampler: SamplerKind) -> usize {
-    size * SamplerKind::ALL.len() + sampler as usize
+/// `SMALL_SCENE_SIZES`) and `variant` in [`small_scene_entries`]' order.
+pub(super) fn small_scene_index(size: usize, variant: SmallVariant) -> usize {
+    size * SmallVariant::ALL.len() + variant.sampler as usize * 2 + usize::from(!variant.connect)
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
-/// each with every sampler in `SamplerKind::ALL`'s order.
+/// each with every variant in `SmallVariant::ALL`'s order.
 pub fn small_scene_entries() -> Vec<String> {
     SMALL_SCENE_SIZES
         .iter()
-        .flat_map(|&size| SamplerKind::ALL.iter().map(move |&k| small_scene_entry(size, k)))
+        .flat_map(|&size| SmallVariant::ALL.iter().map(move |&v| small_scene_entry(size, v)))
         .collect()
 }
 
@@ -146,18 +175,31 @@ pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
 mod tests {
     use super::*;
 
-    /// The renderer's index of a (capacity, sampler) pair finds that
+    /// The renderer's index of a (capacity, variant) pair finds that
     /// pair's entry point among the pipelines made in
-    /// `small_scene_entries`' order, for every pair.
+    /// `small_scene_entries`' order, for every pair, and the flags pick
+    /// the entry points without the connections' code exactly where they
+    /// make no connections.
     #[test]
     fn small_scene_index_finds_its_entry_point() {
+        use pt_core::params::{FLAG_CONNECT, FLAG_NEE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
         let entries = small_scene_entries();
-        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * SamplerKind::ALL.len());
+        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * 6);
         for (i, &size) in SMALL_SCENE_SIZES.iter().enumerate() {
-            for k in SamplerKind::ALL {
-                assert_eq!(entries[small_scene_index(i, k)], small_scene_entry(size, k));
+            for v in SmallVariant::ALL {
+                assert_eq!(entries[small_scene_index(i, v)], small_scene_entry(size, v));
             }
         }
-        assert_eq!(small_scene_entry((5, 2), SamplerKind::SobolDeep), "accumulate_small_5w_2s_sobol_deep");
+        let deep = FLAGS_DEFAULT | FLAG_SOBOL | FLAG_SOBOL_DEEP;
+        assert_eq!(
+            small_scene_entry((5, 2), SmallVariant::of(deep | FLAG_CONNECT)),
+            "accumulate_small_5w_2s_sobol_deep"
+        );
+        assert_eq!(small_scene_entry((5, 2), SmallVariant::of(deep)), "accumulate_small_5w_2s_sobol_deep_unconnected");
+        let no_nee = (deep | FLAG_CONNECT) & !FLAG_NEE;
+        assert_eq!(
+            small_scene_entry((8, 4), SmallVariant::of(no_nee)),
+            "accumulate_small_8w_4s_sobol_deep_unconnected"
+        );
     }
 }

@@ -1,13 +1,12 @@
 //! The progressive GPU renderer for one scene and image tile.
 
-use pt_core::integrator::SamplerKind;
 use pt_core::small_scene::smallest_fit;
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
 use super::context::PendingRead;
-use super::kernel::{Kernel, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index};
+use super::kernel::{Kernel, SmallVariant, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index};
 use super::{GpuContext, GpuError, GpuTimer};
 
 /// The progressive GPU renderer for one scene and one tile of its image
@@ -268,7 +267,7 @@ impl GpuRenderer {
     /// small-scene kernel is chosen, the smallest capacity that holds the
     /// scene.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
-        let index = small_scene_index(self.small_fit?, SamplerKind::of(self.params.flags));
+        let index = small_scene_index(self.small_fit?, SmallVariant::of(self.params.flags));
         self.accumulate_small.as_ref()?.get(index)
     }
 
