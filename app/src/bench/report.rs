@@ -286,13 +286,13 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          carries the exact unoccluded estimate (`LightCone::sample_projected`) and only shadow edges are \
          noisy. Uniform in the cone everywhere instead: {}. Vertices whose cone crosses the horizon sample it \
          uniformly.\n\
-         - Connections through lit wall points (docs/ARCHITECTURE.md) where no wall can shadow the light: \
+         - Connections through lit wall points (docs/ARCHITECTURE.md) around small lights where no wall can shadow the light: \
          each vertex also reaches the light through a wall point picked as the light would light it, weighed \
          by the power heuristic against the BSDF ray that could have found it. Connections off, with the glow \
          lobe in their place and Sobol for the first 5 draws: {}; the glow lobe beside them: {}. Nearly all of \
          the error left after NEE is indirect light, much of it from the bright patch of ceiling right above \
          the light, which the cosine lobe finds rarely and a connection finds by construction. Where they are \
-         off (a wall that can shadow the light; large lights on the CPU), BSDF sampling mixes the cosine lobe \
+         off (a wall that can shadow the light; large lights), BSDF sampling mixes the cosine lobe \
          with the glow lobe around the light (probability 0.25, reach 0.125 in 1 - cos past the light's cone, \
          density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` in pt-core; probability 0.1 around large \
          lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
