@@ -208,16 +208,16 @@ fn render_with_flags(
 }
 
 /// Both small-scene kernels (lavapipe's default), each with each of the
-/// three samplers compiled in, with and without the connections' code,
-/// render what the general kernel renders with the same flags, seed for
-/// seed: the same tests in the same order on
+/// three samplers compiled in, with and without the connections' code and
+/// the glow lobe's, render what the general kernel renders with the same
+/// flags, seed for seed: the same tests in the same order on
 /// a copy of the same numbers. The default scene runs on the 5-wall,
 /// 2-sphere kernel, the scene with a third sphere on the 8-wall, 4-sphere
 /// one. On lavapipe that is bit for bit; another driver may fuse
 /// multiply-adds differently in each, so elsewhere all but a few pixels
 /// (paths that diverge) must agree to 1e-4. The three samplers' images
-/// differ, and so do those with connections: each flag setting reaches
-/// its own entry point.
+/// differ, and so do those with connections and those without the glow
+/// lobe: each flag setting reaches its own entry point.
 #[test]
 fn small_scene_kernels_render_what_the_general_kernel_renders() {
     use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
@@ -227,7 +227,7 @@ fn small_scene_kernels_render_what_the_general_kernel_renders() {
     three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
     let samplers = [FLAGS_DEFAULT & !FLAG_SOBOL, FLAGS_DEFAULT, FLAGS_DEFAULT | FLAG_SOBOL_DEEP];
     let connected = |flags: u32| (flags & !FLAG_GLOW) | FLAG_CONNECT;
-    let all = samplers.into_iter().flat_map(|f| [f, connected(f)]);
+    let all = samplers.into_iter().flat_map(|f| [f, connected(f), f & !FLAG_GLOW]);
     for scene in [Scene::default_scene(), three_spheres] {
         let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
         for flags in all.clone() {

@@ -100,9 +100,10 @@ impl<S: Sampler> Path<S> {
     /// "The small-scene kernel").
     ///
     /// `CONNECT` false leaves the connection's code out, for flags that
-    /// make no connections ([`connects`]): the same path, without code that
-    /// lavapipe would run masked whatever the flags.
-    pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool>(
+    /// make no connections ([`connects`]), and `GLOW` false the glow
+    /// lobe's, for flags without it (`glow_probability` 0): the same path,
+    /// without code that lavapipe would run masked whatever the flags.
+    pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool>(
         &mut self,
         params: &FrameParams,
         scene: &V,
@@ -177,7 +178,7 @@ impl<S: Sampler> Path<S> {
         let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
         // After the last vertex no light found by the BSDF counts (MIS weight
         // 0), so the glow lobe could only find background there.
-        let scatter = Scatter::new(n, &cone, if last { 0.0 } else { glow_probability(params.flags) });
+        let scatter = Scatter::new(n, &cone, if last || !GLOW { 0.0 } else { glow_probability(params.flags) });
         // Where the whole cone is above the horizon NEE samples it by
         // projected solid angle and takes all of the light (no MIS).
         let projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);
@@ -355,7 +356,9 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 /// [`SmallScene::fits`], with the sampler `Smp` fixed at compile time: it
 /// must be the one the flags pick ([`SamplerKind::of`]); and with the
 /// connections' code only where `CONNECT`, which must be true where the
-/// flags make connections ([`connects`]). The same samples as
+/// flags make connections ([`connects`]), and the glow lobe's only where
+/// `GLOW`, which must be true where the flags have it
+/// ([`glow_probability`] not 0). The same samples as
 /// [`render_pixel`], faster on lavapipe.
 ///
 /// lavapipe runs both sides of every branch, masked, and a loop at least
@@ -363,14 +366,14 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 /// path loop, would run all three loops' set-up and one pass of each loop
 /// body in every invocation (docs/ARCHITECTURE.md, "The small-scene
 /// kernel").
-pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool>(
+pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let scene = SmallScene::<W, S>::new(params, geometry);
-    pixel_samples::<Smp, _, _, CONNECT>(x, y, params, geometry, &scene, &mut NoRayCount)
+    pixel_samples::<Smp, _, _, CONNECT, GLOW>(x, y, params, geometry, &scene, &mut NoRayCount)
 }
 
 /// The three samplers the path loop can draw from, as the flags pick them:
@@ -415,10 +418,10 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     rays: &mut C,
 ) -> PixelSamples {
     match SamplerKind::of(params.flags) {
-        SamplerKind::Independent => pixel_samples::<Rng, V, C, true>(x, y, params, geometry, scene, rays),
-        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C, true>(x, y, params, geometry, scene, rays),
+        SamplerKind::Independent => pixel_samples::<Rng, V, C, true, true>(x, y, params, geometry, scene, rays),
+        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C, true, true>(x, y, params, geometry, scene, rays),
         SamplerKind::SobolDeep => {
-            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C, true>(x, y, params, geometry, scene, rays)
+            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C, true, true>(x, y, params, geometry, scene, rays)
         }
     }
 }
@@ -429,7 +432,7 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
 /// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
 /// instead of waiting each sample for their longest path. Samples are added
 /// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
-fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool>(
+fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
@@ -446,7 +449,7 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool>(
     let mut s = 0;
     let mut path = Path::<S>::camera(x, y, pixel, s, params);
     while s < params.samples_per_frame {
-        if path.step::<V, C, CONNECT>(params, scene, &shadow_walls, rays) {
+        if path.step::<V, C, CONNECT, GLOW>(params, scene, &shadow_walls, rays) {
             let l = path.radiance;
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).

@@ -56,17 +56,17 @@ fn accumulate_pixel(
 
 /// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
 /// `S` spheres with sampler `Smp`, the connections' code only where
-/// `CONNECT`, with the parameters copied into the invocation's own memory
-/// too: lavapipe would otherwise gather each of them from the buffer at
-/// every read.
-fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool>(
+/// `CONNECT` and the glow lobe's only where `GLOW`, with the parameters
+/// copied into the invocation's own memory too: lavapipe would otherwise
+/// gather each of them from the buffer at every read.
+fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let params = *params;
-    integrator::render_pixel_small::<Smp, W, S, CONNECT>(x, y, &params, geometry)
+    integrator::render_pixel_small::<Smp, W, S, CONNECT, GLOW>(x, y, &params, geometry)
 }
 
 macro_rules! accumulate_entry {
@@ -99,29 +99,48 @@ accumulate_entry!(accumulate_32x2_groups, 32, 2);
 accumulate_entry!(accumulate_4x4_groups, 4, 4);
 // For scenes that `SmallScene::fits`, one per capacity in
 // `small_scene::SMALL_SCENE_SIZES`, sampler (`integrator::SamplerKind`, in
-// its order) and with or without the connections' code (`_unconnected`,
-// for flags that make none): the renderer's choice on lavapipe.
-accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2, true>);
-accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected, 8, 8, small::<Rng, 5, 2, false>);
-accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2, true>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected, 8, 8, small::<SobolSampler, 5, 2, false>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2, true>);
+// its order) and code compiled in (`kernel::SmallVariant` in pt-render):
+// the connections' and the glow lobe's; the glow lobe's alone
+// (`_unconnected`, for flags that make no connections); neither
+// (`_unconnected_noglow`, for flags with neither). The renderer's choice on
+// lavapipe.
+accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2, true, true>);
+accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected, 8, 8, small::<Rng, 5, 2, false, true>);
+accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected_noglow, 8, 8, small::<Rng, 5, 2, false, false>);
+accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2, true, true>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected, 8, 8, small::<SobolSampler, 5, 2, false, true>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected_noglow, 8, 8, small::<SobolSampler, 5, 2, false, false>);
+accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2, true, true>);
 accumulate_entry!(
     accumulate_small_5w_2s_sobol_deep_unconnected,
     8,
     8,
-    small::<SobolSampler<{ u32::MAX }>, 5, 2, false>
+    small::<SobolSampler<{ u32::MAX }>, 5, 2, false, true>
 );
-accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4, true>);
-accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected, 8, 8, small::<Rng, 8, 4, false>);
-accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4, true>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected, 8, 8, small::<SobolSampler, 8, 4, false>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4, true>);
+accumulate_entry!(
+    accumulate_small_5w_2s_sobol_deep_unconnected_noglow,
+    8,
+    8,
+    small::<SobolSampler<{ u32::MAX }>, 5, 2, false, false>
+);
+accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4, true, true>);
+accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected, 8, 8, small::<Rng, 8, 4, false, true>);
+accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected_noglow, 8, 8, small::<Rng, 8, 4, false, false>);
+accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4, true, true>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected, 8, 8, small::<SobolSampler, 8, 4, false, true>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected_noglow, 8, 8, small::<SobolSampler, 8, 4, false, false>);
+accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4, true, true>);
 accumulate_entry!(
     accumulate_small_8w_4s_sobol_deep_unconnected,
     8,
     8,
-    small::<SobolSampler<{ u32::MAX }>, 8, 4, false>
+    small::<SobolSampler<{ u32::MAX }>, 8, 4, false, true>
+);
+accumulate_entry!(
+    accumulate_small_8w_4s_sobol_deep_unconnected_noglow,
+    8,
+    8,
+    small::<SobolSampler<{ u32::MAX }>, 8, 4, false, false>
 );
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB

@@ -1,6 +1,7 @@
 //! The kernel module and its compute pipelines.
 
 use pt_core::Geometry;
+use pt_core::bsdf::glow_probability;
 use pt_core::integrator::{SamplerKind, connects};
 use pt_core::small_scene::SMALL_SCENE_SIZES;
 
@@ -47,30 +48,43 @@ impl TraceKernel {
 }
 
 /// What a small-scene entry point compiles in beside its capacity: the
-/// sampler, and whether it has the connections' code.
+/// sampler, and whether it has the connections' code and the glow lobe's.
+/// An entry point with the connections has the glow lobe too (a light in
+/// a corner takes both).
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub(super) struct SmallVariant {
     pub(super) sampler: SamplerKind,
     pub(super) connect: bool,
+    pub(super) glow: bool,
 }
 
 impl SmallVariant {
-    /// Every variant, in the kernel's order: samplers in `SamplerKind::ALL`'s
-    /// order, each with then without the connections' code.
-    const ALL: [SmallVariant; 6] = {
-        let k = SamplerKind::ALL;
-        const fn v(sampler: SamplerKind, connect: bool) -> SmallVariant {
-            SmallVariant { sampler, connect }
-        }
-        [v(k[0], true), v(k[0], false), v(k[1], true), v(k[1], false), v(k[2], true), v(k[2], false)]
-    };
+    /// The code variants of one sampler, in the kernel's order: (connect,
+    /// glow).
+    const CODE: [(bool, bool); 3] = [(true, true), (false, true), (false, false)];
 
-    /// The variant integrator `flags` need: their sampler, and the
-    /// connections' code only where they make connections (leaving it out
-    /// where they make none renders the same samples, faster on lavapipe,
+    /// Every variant, in the kernel's order: samplers in
+    /// `SamplerKind::ALL`'s order, each with [`SmallVariant::CODE`]'s.
+    fn all() -> impl Iterator<Item = SmallVariant> {
+        SamplerKind::ALL
+            .into_iter()
+            .flat_map(|sampler| Self::CODE.map(|(connect, glow)| SmallVariant { sampler, connect, glow }))
+    }
+
+    /// The variant integrator `flags` need: their sampler, the connections'
+    /// code only where they make connections, and the glow lobe's only
+    /// where they have it or the connections (leaving code out where the
+    /// flags use none of it renders the same samples, faster on lavapipe,
     /// which would run it masked).
     pub(super) fn of(flags: u32) -> Self {
-        Self { sampler: SamplerKind::of(flags), connect: connects(flags) }
+        let connect = connects(flags);
+        Self { sampler: SamplerKind::of(flags), connect, glow: connect || glow_probability(flags) > 0.0 }
+    }
+
+    /// The variant's index in [`SmallVariant::all`]'s order.
+    fn index(self) -> usize {
+        let code = usize::from(!self.connect) + usize::from(!self.glow);
+        self.sampler as usize * Self::CODE.len() + code
     }
 }
 
@@ -82,23 +96,24 @@ pub(super) fn small_scene_entry((walls, spheres): (u32, u32), variant: SmallVari
         SamplerKind::Sobol => "sobol",
         SamplerKind::SobolDeep => "sobol_deep",
     };
-    let connect = if variant.connect { "" } else { "_unconnected" };
-    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{connect}")
+    let code = match (variant.connect, variant.glow) {
+        (true, _) => "",
+        (false, true) => "_unconnected",
+        (false, false) => "_unconnected_noglow",
+    };
+    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{code}")
 }
 
 /// Index of the small-scene pipeline of capacity `size` (an index in
 /// `SMALL_SCENE_SIZES`) and `variant` in [`small_scene_entries`]' order.
 pub(super) fn small_scene_index(size: usize, variant: SmallVariant) -> usize {
-    size * SmallVariant::ALL.len() + variant.sampler as usize * 2 + usize::from(!variant.connect)
+    size * SamplerKind::ALL.len() * SmallVariant::CODE.len() + variant.index()
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
 /// each with every variant in `SmallVariant::ALL`'s order.
 pub fn small_scene_entries() -> Vec<String> {
-    SMALL_SCENE_SIZES
-        .iter()
-        .flat_map(|&size| SmallVariant::ALL.iter().map(move |&v| small_scene_entry(size, v)))
-        .collect()
+    SMALL_SCENE_SIZES.iter().flat_map(|&size| SmallVariant::all().map(move |v| small_scene_entry(size, v))).collect()
 }
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
@@ -178,24 +193,28 @@ mod tests {
     /// The renderer's index of a (capacity, variant) pair finds that
     /// pair's entry point among the pipelines made in
     /// `small_scene_entries`' order, for every pair, and the flags pick
-    /// the entry points without the connections' code exactly where they
-    /// make no connections.
+    /// the entry points without the connections' or the glow lobe's code
+    /// exactly where they use none of it.
     #[test]
     fn small_scene_index_finds_its_entry_point() {
-        use pt_core::params::{FLAG_CONNECT, FLAG_NEE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
+        use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_NEE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
         let entries = small_scene_entries();
-        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * 6);
+        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * 9);
         for (i, &size) in SMALL_SCENE_SIZES.iter().enumerate() {
-            for v in SmallVariant::ALL {
+            for v in SmallVariant::all() {
                 assert_eq!(entries[small_scene_index(i, v)], small_scene_entry(size, v));
             }
         }
+        let mut sorted = entries.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), entries.len(), "every variant has its own entry point");
         let deep = FLAGS_DEFAULT | FLAG_SOBOL | FLAG_SOBOL_DEEP;
-        assert_eq!(
-            small_scene_entry((5, 2), SmallVariant::of(deep | FLAG_CONNECT)),
-            "accumulate_small_5w_2s_sobol_deep"
-        );
-        assert_eq!(small_scene_entry((5, 2), SmallVariant::of(deep)), "accumulate_small_5w_2s_sobol_deep_unconnected");
+        let entry = |flags| small_scene_entry((5, 2), SmallVariant::of(flags));
+        assert_eq!(entry(deep | FLAG_CONNECT), "accumulate_small_5w_2s_sobol_deep");
+        assert_eq!(entry((deep | FLAG_CONNECT) & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep");
+        assert_eq!(entry(deep), "accumulate_small_5w_2s_sobol_deep_unconnected");
+        assert_eq!(entry(deep & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep_unconnected_noglow");
         let no_nee = (deep | FLAG_CONNECT) & !FLAG_NEE;
         assert_eq!(
             small_scene_entry((8, 4), SmallVariant::of(no_nee)),
