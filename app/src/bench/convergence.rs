@@ -74,6 +74,28 @@ impl Until {
     pub const END: Self = Self { target: None, time_limit: f64::INFINITY };
 }
 
+/// Untimed renders before the timed curves, on seed 99: the default up to
+/// 64 spp, since the first renders of a run were measured up to 30% slower
+/// (driver and machine warming up), which would have penalised whichever
+/// strategy came first; then 4 spp of every other strategy, since a GPU
+/// driver may compile a pipeline at its first dispatch (lavapipe does),
+/// which would count against whichever strategy first needs it.
+pub(crate) fn warm_up(
+    device: Device<'_>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    max_spp: u32,
+    reference: &[[f32; 3]],
+    backend: &BenchBackend,
+    until: Until,
+) -> Result<()> {
+    for st in &STRATEGIES {
+        let spp = if st.id == StrategyId::Default { 64 } else { 4 };
+        curve(device, scene, settings, st, 99, max_spp.min(spp), reference, backend, until)?;
+    }
+    Ok(())
+}
+
 /// Renders `strategy` progressively on one backend up to `max_spp`,
 /// measuring the error at every power-of-two sample count from 4 on, and
 /// stopping early as `until` says. The default strategy takes the scene's
@@ -91,8 +113,7 @@ pub(crate) fn curve(
     backend: &BenchBackend,
     until: Until,
 ) -> Result<Vec<Point>> {
-    let mut params = scene.frame_params(settings, strategy.spp_per_frame, seed);
-    params.flags = strategy.flags_for(scene);
+    let mut params = scene.frame_params_with_flags(settings, strategy.spp_per_frame, seed, strategy.flags_for(scene));
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut r = Renderer::new(device, params, &walls, &spheres)?;
@@ -145,26 +166,8 @@ pub fn convergence(
     }
     backends.push((Device::Cpu, BenchBackend::cpu()));
     for (device, name) in &backends {
-        // Untimed warm-up: the first renders of a run were measured up to
-        // 30% slower (driver and machine warming up), which would have
-        // penalised whichever strategy came first.
         progress(&format!("{name}: warm-up"));
-        curve(
-            *device,
-            scene,
-            settings,
-            StrategyId::Default.strategy(),
-            99,
-            max_spp.min(64),
-            reference,
-            name,
-            Until::END,
-        )?;
-        // And one short render of every other strategy: a GPU driver may
-        // compile a pipeline at its first dispatch (lavapipe does).
-        for st in STRATEGIES.iter().filter(|st| st.id != StrategyId::Default) {
-            curve(*device, scene, settings, st, 99, max_spp.min(4), reference, name, Until::END)?;
-        }
+        warm_up(*device, scene, settings, max_spp, reference, name, Until::END)?;
         // Seeds outer, strategies inner: any drift of the machine's speed
         // during the run is spread over all strategies alike.
         for seed in 0..seeds {

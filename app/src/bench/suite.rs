@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use pt_render::gpu::GpuContext;
 use pt_render::{CpuRenderer, Device, RenderSettings, Scene, metrics, output};
 
-use super::convergence::{Point, Until, curve, means, time_to, times_by_seed};
+use super::convergence::{Point, Until, curve, means, time_to, times_by_seed, warm_up};
 use super::{BenchBackend, STRATEGIES, StrategyId, median_min_max};
 
 /// One scene of the suite.
@@ -194,15 +194,8 @@ pub fn scene_curves(
     let mut points = Vec::new();
     for (device, name) in &backends {
         let default = StrategyId::Default.strategy();
-        // Untimed warm-up (see `convergence`).
         let until = Until { target: Some(target + noise), time_limit: f64::INFINITY };
-        curve(*device, scene, settings, default, 99, max_spp.min(64), reference, name, until)?;
-        // And one short render of every other strategy: a GPU driver may
-        // compile a pipeline at its first dispatch (lavapipe does), which
-        // would count against whichever strategy first needs it.
-        for st in STRATEGIES.iter().filter(|st| st.id != StrategyId::Default) {
-            curve(*device, scene, settings, st, 99, max_spp.min(4), reference, name, until)?;
-        }
+        warm_up(*device, scene, settings, max_spp, reference, name, until)?;
         for seed in 0..seeds {
             progress(&format!("{name}: seed {} of {seeds}", seed + 1));
             let seed = 100 + seed;

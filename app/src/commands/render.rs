@@ -71,9 +71,9 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         },
     };
     let device = ctx.as_ref().map_or(Device::Cpu, Device::Gpu);
-    // The default strategy is the same on every backend, so the parts of a
-    // split render, on whatever machines they run, render alike.
-    params.flags = scene.default_flags();
+    // `params` has the scene's default strategy, the same on every backend,
+    // so the parts of a split render, on whatever machines they run, render
+    // alike.
     match args.sampler {
         SamplerArg::Sobol => params.flags |= pt_core::params::FLAG_SOBOL,
         SamplerArg::Independent => params.flags &= !pt_core::params::FLAG_SOBOL,

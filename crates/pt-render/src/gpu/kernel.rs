@@ -47,28 +47,45 @@ impl TraceKernel {
     }
 }
 
+/// The optional code a small-scene entry point compiles in, in the
+/// kernel's order. Connections come with the glow lobe (a light in a
+/// corner takes both).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(super) enum SmallCode {
+    /// The connections' code and the glow lobe's.
+    Connected,
+    /// The glow lobe's alone (`_unconnected`).
+    Unconnected,
+    /// Neither (`_unconnected_noglow`).
+    Bare,
+}
+
+impl SmallCode {
+    const ALL: [SmallCode; 3] = [SmallCode::Connected, SmallCode::Unconnected, SmallCode::Bare];
+
+    /// The entry point name's suffix.
+    fn suffix(self) -> &'static str {
+        match self {
+            SmallCode::Connected => "",
+            SmallCode::Unconnected => "_unconnected",
+            SmallCode::Bare => "_unconnected_noglow",
+        }
+    }
+}
+
 /// What a small-scene entry point compiles in beside its capacity: the
-/// sampler, and whether it has the connections' code and the glow lobe's.
-/// An entry point with the connections has the glow lobe too (a light in
-/// a corner takes both).
+/// sampler and the optional code.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub(super) struct SmallVariant {
     pub(super) sampler: SamplerKind,
-    pub(super) connect: bool,
-    pub(super) glow: bool,
+    pub(super) code: SmallCode,
 }
 
 impl SmallVariant {
-    /// The code variants of one sampler, in the kernel's order: (connect,
-    /// glow).
-    const CODE: [(bool, bool); 3] = [(true, true), (false, true), (false, false)];
-
     /// Every variant, in the kernel's order: samplers in
-    /// `SamplerKind::ALL`'s order, each with [`SmallVariant::CODE`]'s.
+    /// `SamplerKind::ALL`'s order, each with every [`SmallCode`].
     fn all() -> impl Iterator<Item = SmallVariant> {
-        SamplerKind::ALL
-            .into_iter()
-            .flat_map(|sampler| Self::CODE.map(|(connect, glow)| SmallVariant { sampler, connect, glow }))
+        SamplerKind::ALL.into_iter().flat_map(|sampler| SmallCode::ALL.map(|code| SmallVariant { sampler, code }))
     }
 
     /// The variant integrator `flags` need: their sampler, the connections'
@@ -77,14 +94,14 @@ impl SmallVariant {
     /// flags use none of it renders the same samples, faster on lavapipe,
     /// which would run it masked).
     pub(super) fn of(flags: u32) -> Self {
-        let connect = connects(flags);
-        Self { sampler: SamplerKind::of(flags), connect, glow: connect || glow_probability(flags) > 0.0 }
-    }
-
-    /// The variant's index in [`SmallVariant::all`]'s order.
-    fn index(self) -> usize {
-        let code = usize::from(!self.connect) + usize::from(!self.glow);
-        self.sampler as usize * Self::CODE.len() + code
+        let code = if connects(flags) {
+            SmallCode::Connected
+        } else if glow_probability(flags) > 0.0 {
+            SmallCode::Unconnected
+        } else {
+            SmallCode::Bare
+        };
+        Self { sampler: SamplerKind::of(flags), code }
     }
 }
 
@@ -96,18 +113,14 @@ pub(super) fn small_scene_entry((walls, spheres): (u32, u32), variant: SmallVari
         SamplerKind::Sobol => "sobol",
         SamplerKind::SobolDeep => "sobol_deep",
     };
-    let code = match (variant.connect, variant.glow) {
-        (true, _) => "",
-        (false, true) => "_unconnected",
-        (false, false) => "_unconnected_noglow",
-    };
-    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{code}")
+    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{}", variant.code.suffix())
 }
 
 /// Index of the small-scene pipeline of capacity `size` (an index in
 /// `SMALL_SCENE_SIZES`) and `variant` in [`small_scene_entries`]' order.
 pub(super) fn small_scene_index(size: usize, variant: SmallVariant) -> usize {
-    size * SamplerKind::ALL.len() * SmallVariant::CODE.len() + variant.index()
+    let per_size = SamplerKind::ALL.len() * SmallCode::ALL.len();
+    size * per_size + variant.sampler as usize * SmallCode::ALL.len() + variant.code as usize
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
