@@ -35,9 +35,7 @@ use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{
-    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
-};
+use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::SOBOL_DRAWS;
@@ -629,7 +627,7 @@ impl<'a> Frame<'a> {
             shadow_walls,
             shadow_wall_count,
             nee: params.flags & FLAG_NEE != 0,
-            connect: params.flags & FLAG_NEE != 0 && params.flags & FLAG_CONNECT != 0 && mask.is_empty(),
+            connect: pt_core::integrator::connects(params.flags) && mask.is_empty(),
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
             mis: params.flags & FLAG_MIS != 0,
             glow: glow > 0.0,
@@ -1357,6 +1355,7 @@ mod tests {
     use super::*;
     use crate::scene::{RenderSettings, Scene};
     use pt_core::integrator::render_pixel;
+    use pt_core::params::FLAG_CONNECT;
     use pt_core::params::{FLAG_GLOW, FLAG_GLOW_SPARSE};
     use pt_core::{Sphere, Wall};
 
