@@ -157,7 +157,7 @@ pub const CONNECT_MIN_WALL_SHARE: f32 = 0.75;
 /// lavapipe and 1.26x on the CPU; the low light beside the spheres (2.4
 /// radii from the large one) tied without it, and the light between the
 /// spheres (1.0 radius) did not reach the target without it. The bound
-/// sits between 2.4 and 5.0. It is not in [`glow_rule`], which also gives
+/// sits between 2.4 and 5.0. It is not in `glow_rule`, which also gives
 /// the connected lights their base flags: there it would change the tiny
 /// light's (14 radii from the ceiling), which was not measured without the
 /// lobe's share bit and MIS.
