@@ -41,14 +41,23 @@ pub fn glow_probability(flags: u32) -> f32 {
 /// density (one-sample MIS with the balance heuristic; Veach 1997, 9.2.4),
 /// which is never below 3/4 of the cosine lobe's: no direction the BSDF
 /// reaches gets a large weight.
+///
+/// `repr(C)` in this order: the path loop holds one across a branch, and
+/// naga, which rounds a struct with a `Vec3` (the glow lobe) up to 16 bytes
+/// and aligns it to 16, rejects the kernel where Rust's own order puts a
+/// member inside that rounding.
+#[repr(C)]
 pub struct Scatter {
     n: Vec3,
-    glow: GlowLobe,
     /// 0 without the glow lobe.
     glow_probability: f32,
+    glow: GlowLobe,
 }
 
 impl Scatter {
+    /// The cosine lobe about +z: a placeholder where no direction is drawn.
+    pub const NONE: Self = Self { n: Vec3::Z, glow: GlowLobe::UNUSED, glow_probability: 0.0 };
+
     /// Sampling about unit normal `n`, with the glow lobe around `cone`
     /// picked with probability `glow` when that is not 0, the cone is not
     /// empty and the lobe is not wholly below the surface (the unlit side of

@@ -15,7 +15,7 @@ use crate::light::light_cone;
 use crate::params::{
     FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
 };
-use crate::query::{HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
+use crate::query::{Hit, HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
 use crate::rng::Rng;
 use crate::sampler::{Sampler, SobolSampler};
@@ -57,6 +57,10 @@ pub struct Path<S> {
     /// (by NEE or by a BSDF ray) that this path counts: below 1 where a
     /// connection from the vertex before could have found that vertex.
     direct_weight: f32,
+    /// The path ended after its last direction was drawn (Russian roulette,
+    /// or a direction below the surface): its next step traces nothing and
+    /// hands its radiance back.
+    dead: bool,
     sampler: S,
 }
 
@@ -66,13 +70,19 @@ impl<S: Sampler> Path<S> {
     /// jittered uniformly in the pixel (a box filter) by the sampler's first
     /// pair.
     pub fn camera(x: u32, y: u32, pixel: S::Pixel, s: u32, params: &FrameParams) -> Self {
-        let mut sampler = S::for_camera_sample(pixel, s, params);
-        let u = sampler.next_2d();
-        let ray = params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height);
+        let mut path = Self::start(pixel, s, params);
+        let u = path.sampler.next_2d();
+        path.aim_camera(x, y, u, params);
+        path
+    }
+
+    /// Camera sample `s` before its first draw: no ray yet
+    /// ([`Path::aim_camera`] aims it).
+    fn start(pixel: S::Pixel, s: u32, params: &FrameParams) -> Self {
         Self {
-            origin: ray.origin,
-            dir: ray.dir,
-            sampler,
+            origin: Vec3::ZERO,
+            dir: Vec3::Z,
+            sampler: S::for_camera_sample(pixel, s, params),
             radiance: Vec3::ZERO,
             throughput: Vec3::ONE,
             bounces: 0,
@@ -81,43 +91,68 @@ impl<S: Sampler> Path<S> {
             nee_pdf: 0.0,
             scatter_pdf: 0.0,
             direct_weight: 1.0,
+            dead: false,
         }
+    }
+
+    /// The primary ray through pixel (`x`, `y`) jittered by `u`, the
+    /// first pair of a path just started.
+    fn aim_camera(&mut self, x: u32, y: u32, u: spirv_std::glam::Vec2, params: &FrameParams) {
+        let ray = params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height);
+        (self.origin, self.dir) = (ray.origin, ray.dir);
     }
 
     /// Traces the current ray to its closest hit in `scene` and shades it:
     /// emission, one shadow ray (NEE), a connection through a lit wall
     /// point (`FLAG_CONNECT`, the function `connection`), the next direction and
     /// Russian roulette. Shadow rays test `shadow_walls`, which must be
-    /// `ShadowWalls::new` of the scene's parameters and geometry. Returns
-    /// whether the path has ended; its rays are counted in `rays`
-    /// ([`NoRayCount`] in the renderers).
+    /// `ShadowWalls::new` of the scene's parameters and geometry. Its rays
+    /// are counted in `rays` ([`NoRayCount`] in the renderers).
     ///
-    /// It returns early only before the hit's surface is read (a miss, the
-    /// light, the bounce limit); a path that ends later is marked `ended`
-    /// and runs on, its state then dropped, and the shadow test runs
-    /// whatever the cosine. On lavapipe a return masks all the code after
-    /// it and cost more than the work it skipped (docs/ARCHITECTURE.md,
-    /// "The small-scene kernel").
+    /// Where the path ends before its next direction is drawn (a miss, the
+    /// light, the bounce limit, the last vertex; or a path that ended at its
+    /// previous step), the step writes its radiance to `finished`, returns
+    /// true, and starts the pixel's next sample (`next` of pixel (`x`, `y`),
+    /// sampler part `pixel`) in its place: the next sample's camera ray
+    /// takes the draw that a continuing path spends on its BSDF direction.
+    /// lavapipe runs every line of the loop in every pass, masked, so a
+    /// camera draw of its own, after the step, cost a Sobol draw per pass
+    /// (docs/ARCHITECTURE.md, "The small-scene kernel"). A path that ends
+    /// after that draw (Russian roulette, a direction below the surface) is
+    /// marked `dead`, and its next step traces nothing and ends it. The
+    /// samples are those of a loop that ends each path at once.
+    ///
+    /// A path that ends part-way through the shading is only marked, and
+    /// runs on (its state then dropped), and the shadow tests run whatever
+    /// the cosine: on lavapipe a return masks all the code after it and
+    /// cost more than the work it skipped.
     ///
     /// `CONNECT` false leaves the connection's code out, for flags that
     /// make no connections ([`connects`]), and `GLOW` false the glow
     /// lobe's, for flags without it (`glow_probability` 0): the same path,
     /// without code that lavapipe would run masked whatever the flags.
+    #[allow(clippy::too_many_arguments)]
     pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool>(
         &mut self,
         params: &FrameParams,
         scene: &V,
         shadow_walls: &ShadowWalls,
         rays: &mut C,
+        (x, y, pixel, next): (u32, u32, S::Pixel, u32),
+        finished: &mut Vec3,
     ) -> bool {
         let nee = params.flags & FLAG_NEE != 0;
         let mis = params.flags & FLAG_MIS != 0;
         let light = params.light;
         let ray = Ray { origin: self.origin, dir: self.dir };
+        let live = !self.dead;
 
-        rays.ray();
-        let hit = scene.closest_hit(&ray, params, self.skip_wall, T_FAR);
-        let missed = hit.kind == HitKind::Nothing;
+        let mut hit = Hit::none(T_FAR);
+        if live {
+            rays.ray();
+            hit = scene.closest_hit(&ray, params, self.skip_wall, T_FAR);
+        }
+        let missed = live && hit.kind == HitKind::Nothing;
         let at_light = hit.kind == HitKind::Light;
         if missed {
             self.radiance += self.throughput * params.background;
@@ -135,116 +170,132 @@ impl<S: Sampler> Path<S> {
             };
             self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
         }
-        // One return for the three ways a path ends at its hit.
-        if missed || at_light || self.bounces >= params.max_bounces {
-            return true;
-        }
+        // The three ways a path ends at its hit, and a dead path.
+        let mut ended = !live || missed || at_light || self.bounces >= params.max_bounces;
 
-        let surface = scene.surface(&hit, &ray);
-        let (p, normal, albedo, wall_index) = (surface.point, surface.normal, surface.albedo, surface.wall);
-        // Shade the side the ray arrived on: walls are two-sided, and a
-        // camera inside a sphere sees its inside.
-        let n = if normal.dot(ray.dir) < 0.0 { normal } else { -normal };
-        let origin = offset_origin(p, n, surface.magnitude);
-        let connect = CONNECT && connects(params.flags) && shadow_walls.is_empty();
-        // The share of this vertex's direct light this path counts: the
-        // rest belongs to the connection from the vertex before, which
-        // could have chosen this wall point.
-        self.direct_weight = if connect && self.bounces > 0 && wall_index != NO_WALL {
-            let to_light = light.center - p;
-            let d2 = to_light.dot(to_light);
-            let cos_light = n.dot(to_light);
-            if cos_light > 0.0 {
-                let cos_in = -n.dot(ray.dir);
-                let bsdf_area = self.scatter_pdf * cos_in / (hit.t * hit.t);
-                power_heuristic(bsdf_area, connection_pdf(cos_light / d2.sqrt(), d2))
+        // The vertex's share of the direction draw below, set where the path
+        // goes on from the hit.
+        let mut scatter = Scatter::NONE;
+        let (mut origin, mut n, mut albedo) = (Vec3::ZERO, Vec3::Z, Vec3::ZERO);
+        let (mut wall_index, mut last, mut projected, mut cone_pdf) = (NO_WALL, false, false, 0.0);
+        if !ended {
+            let surface = scene.surface(&hit, &ray);
+            let p = surface.point;
+            (albedo, wall_index) = (surface.albedo, surface.wall);
+            // Shade the side the ray arrived on: walls are two-sided, and a
+            // camera inside a sphere sees its inside.
+            n = if surface.normal.dot(ray.dir) < 0.0 { surface.normal } else { -surface.normal };
+            origin = offset_origin(p, n, surface.magnitude);
+            let connect = CONNECT && connects(params.flags) && shadow_walls.is_empty();
+            // The share of this vertex's direct light this path counts: the
+            // rest belongs to the connection from the vertex before, which
+            // could have chosen this wall point.
+            self.direct_weight = if connect && self.bounces > 0 && wall_index != NO_WALL {
+                let to_light = light.center - p;
+                let d2 = to_light.dot(to_light);
+                let cos_light = n.dot(to_light);
+                if cos_light > 0.0 {
+                    let cos_in = -n.dot(ray.dir);
+                    let bsdf_area = self.scatter_pdf * cos_in / (hit.t * hit.t);
+                    power_heuristic(bsdf_area, connection_pdf(cos_light / d2.sqrt(), d2))
+                } else {
+                    1.0
+                }
             } else {
                 1.0
-            }
-        } else {
-            1.0
-        };
-
-        // Next-event estimation: one shadow ray toward the light's cone. The
-        // cone is seen from the hit point itself: from the offset origin,
-        // nearer the light, it would be brighter by twice the offset over
-        // the distance (8e-6 in the spherical-room accuracy case).
-        let cone = light_cone(&light, p);
-        let cone_pdf = cone.pdf();
-        // At the last vertex NEE takes all of the light's MIS weight and the
-        // BSDF ray none (weights that sum to one per direction keep MIS
-        // unbiased; Veach 1997, section 9.2): that ray could then only add
-        // background, and with a black one it is not traced.
-        let last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
-        // After the last vertex no light found by the BSDF counts (MIS weight
-        // 0), so the glow lobe could only find background there.
-        let scatter = Scatter::new(n, &cone, if last || !GLOW { 0.0 } else { glow_probability(params.flags) });
-        // Where the whole cone is above the horizon NEE samples it by
-        // projected solid angle and takes all of the light (no MIS).
-        let projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);
-        if nee && !cone.is_empty() {
-            let u = self.sampler.next_2d();
-            let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
-            let cos = n.dot(dir);
-            let shadow = Ray { origin, dir };
-            // Traced whatever the cosine (see above).
-            let blocked = scene.occluded(&shadow, params, shadow_walls, wall_index, dist);
-            if cos > 0.0 {
-                rays.ray();
-            }
-            if cos > 0.0 && !blocked {
-                let value = if projected {
-                    cone.projected_over_pi(n)
-                } else {
-                    let bsdf = cos * (1.0 / PI);
-                    let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
-                    // f cos / pdf = (albedo / pi) cos / cone_pdf
-                    bsdf * weight / cone_pdf
-                };
-                self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
-            }
-        }
-        if connect && self.bounces + 1 < params.max_bounces {
-            let (u, v) = (self.sampler.next_2d(), self.sampler.next_2d());
-            let through = connection(n, origin, &scatter, u, v, params, scene, shadow_walls, rays);
-            self.radiance += self.throughput * albedo * through;
-        }
-
-        // Past here a path that ends is only marked `ended` (see above).
-        let mut ended = last && params.background.max_element() == 0.0;
-
-        // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
-        // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
-        // the surface carries nothing and ends the path. After the last
-        // vertex, and after one whose NEE sampled by projected solid angle, a
-        // BSDF-found light has MIS weight 0: its pdf is kept as 0 for
-        // `power_heuristic`.
-        let dir = scatter.sample(self.sampler.next_2d());
-        let cos = n.dot(dir);
-        let pdf = scatter.pdf(dir);
-        ended |= !(cos > 0.0 && pdf > 0.0);
-        self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
-        self.scatter_pdf = pdf;
-        self.nee_pdf = cone_pdf;
-        self.throughput *= albedo * (cos * (1.0 / PI) / pdf);
-        self.bounces += 1;
-
-        // Russian roulette: survive with a probability that follows the
-        // throughput, and divide by it so the estimate stays unbiased.
-        if self.bounces >= params.rr_start {
-            let t = self.throughput;
-            let follow = if params.flags & FLAG_RR_LUMINANCE != 0 {
-                t.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-            } else {
-                t.max_element()
             };
-            let survive = follow.clamp(RR_MIN_SURVIVAL, 1.0);
-            ended |= self.sampler.next_1d() >= survive;
-            self.throughput /= survive;
+
+            // Next-event estimation: one shadow ray toward the light's cone. The
+            // cone is seen from the hit point itself: from the offset origin,
+            // nearer the light, it would be brighter by twice the offset over
+            // the distance (8e-6 in the spherical-room accuracy case).
+            let cone = light_cone(&light, p);
+            cone_pdf = cone.pdf();
+            // At the last vertex NEE takes all of the light's MIS weight and the
+            // BSDF ray none (weights that sum to one per direction keep MIS
+            // unbiased; Veach 1997, section 9.2): that ray could then only add
+            // background, and with a black one it is not traced.
+            last = nee && !cone.is_empty() && self.bounces + 1 >= params.max_bounces;
+            // After the last vertex no light found by the BSDF counts (MIS weight
+            // 0), so the glow lobe could only find background there.
+            scatter = Scatter::new(n, &cone, if last || !GLOW { 0.0 } else { glow_probability(params.flags) });
+            // Where the whole cone is above the horizon NEE samples it by
+            // projected solid angle and takes all of the light (no MIS).
+            projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);
+            if nee && !cone.is_empty() {
+                let u = self.sampler.next_2d();
+                let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
+                let cos = n.dot(dir);
+                let shadow = Ray { origin, dir };
+                // Traced whatever the cosine (see above).
+                let blocked = scene.occluded(&shadow, params, shadow_walls, wall_index, dist);
+                if cos > 0.0 {
+                    rays.ray();
+                }
+                if cos > 0.0 && !blocked {
+                    let value = if projected {
+                        cone.projected_over_pi(n)
+                    } else {
+                        let bsdf = cos * (1.0 / PI);
+                        let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
+                        // f cos / pdf = (albedo / pi) cos / cone_pdf
+                        bsdf * weight / cone_pdf
+                    };
+                    self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
+                }
+            }
+            if connect && self.bounces + 1 < params.max_bounces {
+                let (u, v) = (self.sampler.next_2d(), self.sampler.next_2d());
+                let through = connection(n, origin, &scatter, u, v, params, scene, shadow_walls, rays);
+                self.radiance += self.throughput * albedo * through;
+            }
+            ended = last && params.background.max_element() == 0.0;
         }
 
-        (self.origin, self.dir) = (origin, dir);
-        self.skip_wall = wall_index;
+        // The path's sample is done: hand it back and start the next one.
+        if ended {
+            *finished = self.radiance;
+            *self = Self::start(pixel, next, params);
+        }
+        // One draw: the next sample's pixel jitter, or the BSDF direction.
+        let u = self.sampler.next_2d();
+        if ended {
+            self.aim_camera(x, y, u, params);
+        } else {
+            // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
+            // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
+            // the surface carries nothing and ends the path. After the last
+            // vertex, and after one whose NEE sampled by projected solid angle, a
+            // BSDF-found light has MIS weight 0: its pdf is kept as 0 for
+            // `power_heuristic`.
+            let dir = scatter.sample(u);
+            let cos = n.dot(dir);
+            let pdf = scatter.pdf(dir);
+            let mut dead = !(cos > 0.0 && pdf > 0.0);
+            self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
+            self.scatter_pdf = pdf;
+            self.nee_pdf = cone_pdf;
+            self.throughput *= albedo * (cos * (1.0 / PI) / pdf);
+            self.bounces += 1;
+
+            // Russian roulette: survive with a probability that follows the
+            // throughput, and divide by it so the estimate stays unbiased.
+            if self.bounces >= params.rr_start {
+                let t = self.throughput;
+                let follow = if params.flags & FLAG_RR_LUMINANCE != 0 {
+                    t.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+                } else {
+                    t.max_element()
+                };
+                let survive = follow.clamp(RR_MIN_SURVIVAL, 1.0);
+                dead |= self.sampler.next_1d() >= survive;
+                self.throughput /= survive;
+            }
+
+            (self.origin, self.dir) = (origin, dir);
+            self.skip_wall = wall_index;
+            self.dead = dead;
+        }
         ended
     }
 }
@@ -428,7 +479,8 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
 
 /// The pixel's samples, one segment per loop iteration: when a path ends,
 /// the next camera sample starts in the same iteration's place (path
-/// regeneration, Novak, Havran and Dachsbacher 2010). SIMD lanes (8 on
+/// regeneration, Novak, Havran and Dachsbacher 2010; [`Path::step`] starts
+/// it). SIMD lanes (8 on
 /// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
 /// instead of waiting each sample for their longest path. Samples are added
 /// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
@@ -448,9 +500,10 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool, c
     let pixel = S::for_pixel(x, y, params);
     let mut s = 0;
     let mut path = Path::<S>::camera(x, y, pixel, s, params);
+    let mut l = Vec3::ZERO;
     while s < params.samples_per_frame {
-        if path.step::<V, C, CONNECT, GLOW>(params, scene, &shadow_walls, rays) {
-            let l = path.radiance;
+        // After the pixel's last sample the step starts one more, unused.
+        if path.step::<V, C, CONNECT, GLOW>(params, scene, &shadow_walls, rays, (x, y, pixel, s + 1), &mut l) {
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).
                 kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);
@@ -459,9 +512,6 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool, c
                 out.non_finite += 1;
             }
             s += 1;
-            if s < params.samples_per_frame {
-                path = Path::camera(x, y, pixel, s, params);
-            }
         }
     }
     out

@@ -187,6 +187,11 @@ pub const GLOW_MIN_SCALE: f32 = 1e-6;
 /// cosine lobe, so that paths find the bright surroundings of a small light
 /// (a ceiling right above it) far more often than the cosine lobe alone
 /// does; the walls' indirect light is then far less noisy.
+///
+/// `repr(C)`, axis first: naga gives a struct with a `Vec3` the vector's
+/// 16-byte alignment, and a [`crate::bsdf::Scatter`] held across a branch
+/// keeps this one as a member.
+#[repr(C)]
 #[derive(Copy, Clone, Debug)]
 pub struct GlowLobe {
     axis: Vec3,
