@@ -25,7 +25,7 @@ Fairness:
 - Both renderers get the same machine, scene, camera, resolution, bounce
   limit, pixel filter and reference. Mitsuba renders each count from
   scratch (it has no progressive mode), so its time at N spp is one N-spp
-  render, while ours accumulates.
+  render; `pathtracer bench` times ours the same way.
 - A sampler may round the sample count (multijitter and orthogonal need
   squares or prime powers); the count Mitsuba reports is the one written.
 - relMSE is the project's (docs/ARCHITECTURE.md, Conventions):

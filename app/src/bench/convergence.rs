@@ -96,11 +96,20 @@ pub(crate) fn warm_up(
     Ok(())
 }
 
-/// Renders `strategy` progressively on one backend up to `max_spp`,
-/// measuring the error at every power-of-two sample count from 4 on, and
-/// stopping early as `until` says. The default strategy takes the scene's
-/// own flags ([`Scene::default_flags`]). Time is wall clock around
-/// synchronised frames; readback and metric evaluation are outside it.
+/// Renders `strategy` on one backend at every power-of-two sample count
+/// from 4 up to `max_spp`, measuring the error of each, and stopping early
+/// as `until` says. The default strategy takes the scene's own flags
+/// ([`Scene::default_flags`]).
+///
+/// Each count is one render from scratch, in frames of the strategy's
+/// samples per frame, timed by wall clock from its first frame until it
+/// has finished: what `pathtracer render --spp N` spends rendering, and how
+/// Mitsuba is timed (it has no progressive mode). The renderer's set-up,
+/// readback and metric evaluation are outside the time. A seed's renders
+/// at 2N and N spp share their first N samples, so the errors are those of
+/// one progressive render; a progressive render's time would also count
+/// the small frames and synchronisations before each measurement (4, 4, 8,
+/// 16, 32 spp before 64), which a render to a sample count does not make.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn curve(
     device: Device<'_>,
@@ -116,35 +125,36 @@ pub(crate) fn curve(
     let mut params = scene.frame_params_with_flags(settings, strategy.spp_per_frame, seed, strategy.flags_for(scene));
     params.rr_start = strategy.rr_start;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
-    let mut r = Renderer::new(device, params, &walls, &spheres)?;
     let mut points = Vec::new();
-    let (mut done, mut next, mut time) = (0u32, 4u32, 0.0f64);
-    while done < max_spp {
+    let mut spp = 4u32.min(max_spp);
+    while spp <= max_spp {
+        let mut r = Renderer::new(device, params, &walls, &spheres)?;
         let start = Instant::now();
-        while done < next {
-            let n = strategy.spp_per_frame.min(next - done);
+        let mut done = 0;
+        while done < spp {
+            let n = strategy.spp_per_frame.min(spp - done);
             r.frame(n);
             done += n;
         }
         r.wait()?;
-        time += start.elapsed().as_secs_f64();
+        let time = start.elapsed().as_secs_f64();
         let accum = r.accum()?;
         let img = means(&accum);
         points.push(Point {
             backend: backend.clone(),
             strategy: strategy.name.to_string(),
             seed,
-            spp: done,
+            spp,
             time,
             rel_mse: metrics::rel_mse(&img, reference),
             mape: metrics::mape(&img, reference),
             rmse: metrics::rmse(&img, reference),
         });
-        next *= 2;
         let last = &points[points.len() - 1];
-        if until.target.is_some_and(|t| last.rel_mse < t) || last.time > until.time_limit {
+        if until.target.is_some_and(|t| last.rel_mse < t) || last.time > until.time_limit || spp == max_spp {
             break;
         }
+        spp = (2 * spp).min(max_spp);
     }
     Ok(points)
 }

@@ -195,8 +195,9 @@ machine, at the same resolution, against the same reference, with each of its `i
 `multijitter`, `ldsampler` and `orthogonal` samplers, and keeps the one that reaches relMSE 1e-3 \
 soonest (named below). Mitsuba's kernels are compiled before timing (each sample count is \
 rendered once untimed, then timed); each of its points is one render from scratch at that sample \
-count, with the median time and mean relMSE of its seeds, as ours. Our points are the progressive \
-renders above (default strategy). Times to relMSE 1e-3 are interpolated log-log.\n\n";
+count, with the median time and mean relMSE of its seeds. Ours are timed the same way: each point \
+is one render from scratch at its sample count (the default strategy, above). Times to relMSE 1e-3 \
+are interpolated log-log.\n\n";
 
 /// The sampler named in the header of a curve from `compare.py` (its
 /// fourth column); "independent" for curves written before it named one,
@@ -449,8 +450,10 @@ pub(crate) struct ErrorAgainstTime {
 pub(crate) fn error_against_time_section(r: &ErrorAgainstTime) -> String {
     format!(
         "## Error against time\n\nScene: {}; {}x{} pixels, {} bounces; {} seeds per strategy; errors against {}. \
-         Each strategy renders progressively to {} spp; errors are measured at 4, 8, 16, ... spp (no frame \
-         spans a measurement), with time counted around synchronised frames only (readback and evaluation excluded). An untimed warm-up \
+         Each strategy renders 4, 8, 16, ... up to {} spp, each count from scratch (as Mitsuba is timed, \
+         and as `pathtracer render --spp N` renders), with the samples of one progressive render: \
+         a seed's render at 2N spp begins with the N samples of its render at N spp. Time is wall clock from \
+         a render's first frame until it has finished (set-up, readback and evaluation excluded). An untimed warm-up \
          render comes first, then every strategy once per seed in turn; each point takes the median time \
          and the mean relMSE of the seeds (the machine is shared: a single run can be slowed by half). \
          Equal time is the \

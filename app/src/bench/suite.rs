@@ -590,7 +590,8 @@ pub fn suite_markdown(
         s,
         "Every scene of `{dir}/` at {w}x{h} pixels with its own bounce limit, {seeds} seeds per strategy and backend. \
          Each seed renders the default first, then every other strategy (but one that renders the scene just as \
-         the default does: \"the default here\"), progressively, measuring relMSE at 4, 8, 16, ... spp \
+         the default does: \"the default here\"), at 4, 8, 16, ... spp, each count from scratch and timed \
+         from its first frame until it has finished, as Mitsuba is timed, measuring relMSE \
          against the scene's cached reference, and stops a curve at the first measurement below \
          {target:.0e} (or past {CUT_OFF}x the default's time of that seed: \"not reached\"). Times are read \
          log-log between measurements, per seed; the tables give the median and the seeds' range. The default's \
