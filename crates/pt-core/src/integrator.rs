@@ -128,11 +128,13 @@ impl<S: Sampler> Path<S> {
     /// cost more than the work it skipped.
     ///
     /// `CONNECT` false leaves the connection's code out, for flags that
-    /// make no connections ([`connects`]), and `GLOW` false the glow
-    /// lobe's, for flags without it (`glow_probability` 0): the same path,
-    /// without code that lavapipe would run masked whatever the flags.
+    /// make no connections ([`connects`]), `GLOW` false the glow lobe's,
+    /// for flags without it (`glow_probability` 0), and `ROULETTE` false
+    /// Russian roulette's, for frames where it cannot act
+    /// ([`roulette_acts`]): the same path, without code that lavapipe
+    /// would run masked whatever the flags.
     #[allow(clippy::too_many_arguments)]
-    pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool>(
+    pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool, const ROULETTE: bool>(
         &mut self,
         params: &FrameParams,
         scene: &V,
@@ -280,7 +282,7 @@ impl<S: Sampler> Path<S> {
 
             // Russian roulette: survive with a probability that follows the
             // throughput, and divide by it so the estimate stays unbiased.
-            if self.bounces >= params.rr_start {
+            if ROULETTE && self.bounces >= params.rr_start {
                 let t = self.throughput;
                 let follow = if params.flags & FLAG_RR_LUMINANCE != 0 {
                     t.dot(Vec3::new(0.2126, 0.7152, 0.0722))
@@ -298,6 +300,26 @@ impl<S: Sampler> Path<S> {
         }
         ended
     }
+}
+
+/// Whether Russian roulette can act on a path of the frame `params`
+/// describe: whether a path can draw a direction at a vertex after which
+/// it has made `rr_start` scattering events or more.
+///
+/// A path draws at most `max_bounces` directions, so roulette from a later
+/// bounce never acts. Roulette from the last one acts only where a path
+/// draws a direction at its last vertex, which it does not where NEE takes
+/// all of the light there and the background is black (the path then ends
+/// at that vertex, [`Path::step`]). One exception: NEE finds no light from
+/// a surface point inside the light, and a path at such a point does draw
+/// on; only a scene whose surfaces cut into the light has one, and leaving
+/// the roulette out is unbiased there too (it only saves work). Where this
+/// is false, [`Path::step`] without the roulette's code traces the same
+/// samples.
+#[inline]
+pub fn roulette_acts(params: &FrameParams) -> bool {
+    let ends_at_last_vertex = params.flags & FLAG_NEE != 0 && params.background.max_element() == 0.0;
+    params.rr_start < params.max_bounces || (params.rr_start == params.max_bounces && !ends_at_last_vertex)
 }
 
 /// Whether integrator `flags` make connections through lit wall points
@@ -409,22 +431,30 @@ pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -
 /// connections' code only where `CONNECT`, which must be true where the
 /// flags make connections ([`connects`]), and the glow lobe's only where
 /// `GLOW`, which must be true where the flags have it
-/// ([`glow_probability`] not 0). The same samples as
-/// [`render_pixel`], faster on lavapipe.
+/// ([`glow_probability`] not 0), and Russian roulette's only where
+/// `ROULETTE`, which must be true where it acts ([`roulette_acts`]). The
+/// same samples as [`render_pixel`], faster on lavapipe.
 ///
 /// lavapipe runs both sides of every branch, masked, and a loop at least
 /// once: [`render_pixel`]'s choice among three samplers, each with its own
 /// path loop, would run all three loops' set-up and one pass of each loop
 /// body in every invocation (docs/ARCHITECTURE.md, "The small-scene
 /// kernel").
-pub fn render_pixel_small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool>(
+pub fn render_pixel_small<
+    Smp: Sampler,
+    const W: u32,
+    const S: u32,
+    const CONNECT: bool,
+    const GLOW: bool,
+    const ROULETTE: bool,
+>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let scene = SmallScene::<W, S>::new(params, geometry);
-    pixel_samples::<Smp, _, _, CONNECT, GLOW>(x, y, params, geometry, &scene, &mut NoRayCount)
+    pixel_samples::<Smp, _, _, CONNECT, GLOW, ROULETTE>(x, y, params, geometry, &scene, &mut NoRayCount)
 }
 
 /// The three samplers the path loop can draw from, as the flags pick them:
@@ -469,10 +499,12 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
     rays: &mut C,
 ) -> PixelSamples {
     match SamplerKind::of(params.flags) {
-        SamplerKind::Independent => pixel_samples::<Rng, V, C, true, true>(x, y, params, geometry, scene, rays),
-        SamplerKind::Sobol => pixel_samples::<SobolSampler, V, C, true, true>(x, y, params, geometry, scene, rays),
+        SamplerKind::Independent => pixel_samples::<Rng, V, C, true, true, true>(x, y, params, geometry, scene, rays),
+        SamplerKind::Sobol => {
+            pixel_samples::<SobolSampler, V, C, true, true, true>(x, y, params, geometry, scene, rays)
+        }
         SamplerKind::SobolDeep => {
-            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C, true, true>(x, y, params, geometry, scene, rays)
+            pixel_samples::<SobolSampler<{ u32::MAX }>, V, C, true, true, true>(x, y, params, geometry, scene, rays)
         }
     }
 }
@@ -484,7 +516,14 @@ pub(crate) fn pixel<V: SceneView, C: RayCounter>(
 /// lavapipe, 32 on NVIDIA) then stay busy until the pixel's last sample
 /// instead of waiting each sample for their longest path. Samples are added
 /// in order 0, 1, ..., so the sum is the one a sample-by-sample loop makes.
-fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool>(
+fn pixel_samples<
+    S: Sampler,
+    V: SceneView,
+    C: RayCounter,
+    const CONNECT: bool,
+    const GLOW: bool,
+    const ROULETTE: bool,
+>(
     x: u32,
     y: u32,
     params: &FrameParams,
@@ -503,7 +542,8 @@ fn pixel_samples<S: Sampler, V: SceneView, C: RayCounter, const CONNECT: bool, c
     let mut l = Vec3::ZERO;
     while s < params.samples_per_frame {
         // After the pixel's last sample the step starts one more, unused.
-        if path.step::<V, C, CONNECT, GLOW>(params, scene, &shadow_walls, rays, (x, y, pixel, s + 1), &mut l) {
+        if path.step::<V, C, CONNECT, GLOW, ROULETTE>(params, scene, &shadow_walls, rays, (x, y, pixel, s + 1), &mut l)
+        {
             if is_finite(l) {
                 // width != 0 always; the compiler cannot know it (see kahan_add).
                 kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);

@@ -56,17 +56,18 @@ fn accumulate_pixel(
 
 /// [`integrator::render_pixel_small`] for a scene of at most `W` walls and
 /// `S` spheres with sampler `Smp`, the connections' code only where
-/// `CONNECT` and the glow lobe's only where `GLOW`, with the parameters
-/// copied into the invocation's own memory too: lavapipe would otherwise
-/// gather each of them from the buffer at every read.
-fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool>(
+/// `CONNECT`, the glow lobe's only where `GLOW` and Russian roulette's only
+/// where `ROULETTE`, with the parameters copied into the invocation's own
+/// memory too: lavapipe would otherwise gather each of them from the buffer
+/// at every read.
+fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool, const ROULETTE: bool>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
     let params = *params;
-    integrator::render_pixel_small::<Smp, W, S, CONNECT, GLOW>(x, y, &params, geometry)
+    integrator::render_pixel_small::<Smp, W, S, CONNECT, GLOW, ROULETTE>(x, y, &params, geometry)
 }
 
 macro_rules! accumulate_entry {
@@ -88,6 +89,16 @@ macro_rules! accumulate_entry {
     };
 }
 
+/// A small-scene entry point and its twin without Russian roulette's code
+/// (`_noroulette`), for frames where the roulette cannot act
+/// (`integrator::roulette_acts`).
+macro_rules! small_entries {
+    ($name:ident, $noroulette:ident, $smp:ty, $w:literal, $s:literal, $connect:literal, $glow:literal) => {
+        accumulate_entry!($name, 8, 8, small::<$smp, $w, $s, $connect, $glow, true>);
+        accumulate_entry!($noroulette, 8, 8, small::<$smp, $w, $s, $connect, $glow, false>);
+    };
+}
+
 // Entry point names end in a letter: naga's WGSL writer, which a browser's
 // WebGPU backend goes through, appends `_` to a name that ends in a digit,
 // and the pipeline would then not find its entry point.
@@ -102,45 +113,139 @@ accumulate_entry!(accumulate_4x4_groups, 4, 4);
 // its order) and code compiled in (`kernel::SmallVariant` in pt-render):
 // the connections' and the glow lobe's; the glow lobe's alone
 // (`_unconnected`, for flags that make no connections); neither
-// (`_unconnected_noglow`, for flags with neither). The renderer's choice on
+// (`_unconnected_noglow`, for flags with neither); each with Russian
+// roulette's code and without it (`_noroulette`). The renderer's choice on
 // lavapipe.
-accumulate_entry!(accumulate_small_5w_2s_pcg, 8, 8, small::<Rng, 5, 2, true, true>);
-accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected, 8, 8, small::<Rng, 5, 2, false, true>);
-accumulate_entry!(accumulate_small_5w_2s_pcg_unconnected_noglow, 8, 8, small::<Rng, 5, 2, false, false>);
-accumulate_entry!(accumulate_small_5w_2s_sobol, 8, 8, small::<SobolSampler, 5, 2, true, true>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected, 8, 8, small::<SobolSampler, 5, 2, false, true>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_unconnected_noglow, 8, 8, small::<SobolSampler, 5, 2, false, false>);
-accumulate_entry!(accumulate_small_5w_2s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 5, 2, true, true>);
-accumulate_entry!(
+type SobolDeep = SobolSampler<{ u32::MAX }>;
+small_entries!(accumulate_small_5w_2s_pcg, accumulate_small_5w_2s_pcg_noroulette, Rng, 5, 2, true, true);
+small_entries!(
+    accumulate_small_5w_2s_pcg_unconnected,
+    accumulate_small_5w_2s_pcg_unconnected_noroulette,
+    Rng,
+    5,
+    2,
+    false,
+    true
+);
+small_entries!(
+    accumulate_small_5w_2s_pcg_unconnected_noglow,
+    accumulate_small_5w_2s_pcg_unconnected_noglow_noroulette,
+    Rng,
+    5,
+    2,
+    false,
+    false
+);
+small_entries!(accumulate_small_5w_2s_sobol, accumulate_small_5w_2s_sobol_noroulette, SobolSampler, 5, 2, true, true);
+small_entries!(
+    accumulate_small_5w_2s_sobol_unconnected,
+    accumulate_small_5w_2s_sobol_unconnected_noroulette,
+    SobolSampler,
+    5,
+    2,
+    false,
+    true
+);
+small_entries!(
+    accumulate_small_5w_2s_sobol_unconnected_noglow,
+    accumulate_small_5w_2s_sobol_unconnected_noglow_noroulette,
+    SobolSampler,
+    5,
+    2,
+    false,
+    false
+);
+small_entries!(
+    accumulate_small_5w_2s_sobol_deep,
+    accumulate_small_5w_2s_sobol_deep_noroulette,
+    SobolDeep,
+    5,
+    2,
+    true,
+    true
+);
+small_entries!(
     accumulate_small_5w_2s_sobol_deep_unconnected,
-    8,
-    8,
-    small::<SobolSampler<{ u32::MAX }>, 5, 2, false, true>
+    accumulate_small_5w_2s_sobol_deep_unconnected_noroulette,
+    SobolDeep,
+    5,
+    2,
+    false,
+    true
 );
-accumulate_entry!(
+small_entries!(
     accumulate_small_5w_2s_sobol_deep_unconnected_noglow,
-    8,
-    8,
-    small::<SobolSampler<{ u32::MAX }>, 5, 2, false, false>
+    accumulate_small_5w_2s_sobol_deep_unconnected_noglow_noroulette,
+    SobolDeep,
+    5,
+    2,
+    false,
+    false
 );
-accumulate_entry!(accumulate_small_8w_4s_pcg, 8, 8, small::<Rng, 8, 4, true, true>);
-accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected, 8, 8, small::<Rng, 8, 4, false, true>);
-accumulate_entry!(accumulate_small_8w_4s_pcg_unconnected_noglow, 8, 8, small::<Rng, 8, 4, false, false>);
-accumulate_entry!(accumulate_small_8w_4s_sobol, 8, 8, small::<SobolSampler, 8, 4, true, true>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected, 8, 8, small::<SobolSampler, 8, 4, false, true>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_unconnected_noglow, 8, 8, small::<SobolSampler, 8, 4, false, false>);
-accumulate_entry!(accumulate_small_8w_4s_sobol_deep, 8, 8, small::<SobolSampler<{ u32::MAX }>, 8, 4, true, true>);
-accumulate_entry!(
+small_entries!(accumulate_small_8w_4s_pcg, accumulate_small_8w_4s_pcg_noroulette, Rng, 8, 4, true, true);
+small_entries!(
+    accumulate_small_8w_4s_pcg_unconnected,
+    accumulate_small_8w_4s_pcg_unconnected_noroulette,
+    Rng,
+    8,
+    4,
+    false,
+    true
+);
+small_entries!(
+    accumulate_small_8w_4s_pcg_unconnected_noglow,
+    accumulate_small_8w_4s_pcg_unconnected_noglow_noroulette,
+    Rng,
+    8,
+    4,
+    false,
+    false
+);
+small_entries!(accumulate_small_8w_4s_sobol, accumulate_small_8w_4s_sobol_noroulette, SobolSampler, 8, 4, true, true);
+small_entries!(
+    accumulate_small_8w_4s_sobol_unconnected,
+    accumulate_small_8w_4s_sobol_unconnected_noroulette,
+    SobolSampler,
+    8,
+    4,
+    false,
+    true
+);
+small_entries!(
+    accumulate_small_8w_4s_sobol_unconnected_noglow,
+    accumulate_small_8w_4s_sobol_unconnected_noglow_noroulette,
+    SobolSampler,
+    8,
+    4,
+    false,
+    false
+);
+small_entries!(
+    accumulate_small_8w_4s_sobol_deep,
+    accumulate_small_8w_4s_sobol_deep_noroulette,
+    SobolDeep,
+    8,
+    4,
+    true,
+    true
+);
+small_entries!(
     accumulate_small_8w_4s_sobol_deep_unconnected,
+    accumulate_small_8w_4s_sobol_deep_unconnected_noroulette,
+    SobolDeep,
     8,
-    8,
-    small::<SobolSampler<{ u32::MAX }>, 8, 4, false, true>
+    4,
+    false,
+    true
 );
-accumulate_entry!(
+small_entries!(
     accumulate_small_8w_4s_sobol_deep_unconnected_noglow,
+    accumulate_small_8w_4s_sobol_deep_unconnected_noglow_noroulette,
+    SobolDeep,
     8,
-    8,
-    small::<SobolSampler<{ u32::MAX }>, 8, 4, false, false>
+    4,
+    false,
+    false
 );
 
 /// Turns every pixel's mean into a display colour: exposure, tone map, sRGB

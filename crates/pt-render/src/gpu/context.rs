@@ -4,7 +4,7 @@
 use std::sync::{Arc, Mutex, OnceLock};
 
 use super::GpuError;
-use super::kernel::{Kernel, compute_pipeline, small_scene_entries};
+use super::kernel::{Kernel, SmallKernels};
 
 /// A device and queue on the best adapter available, with its description.
 pub struct GpuContext {
@@ -19,9 +19,9 @@ pub struct GpuContext {
     failure: Arc<Mutex<Option<String>>>,
     /// The kernel's pipelines, compiled on first use.
     kernel: OnceLock<Kernel>,
-    /// The small-scene kernels, one per entry of `SMALL_SCENE_SIZES` and
-    /// sampler (`kernel::small_scene_entries`), compiled on first use.
-    small_kernels: OnceLock<Vec<wgpu::ComputePipeline>>,
+    /// The small-scene kernels (`kernel::small_scene_entries`), each
+    /// compiled on first use.
+    small_kernels: OnceLock<Arc<SmallKernels>>,
 }
 
 /// Preference among adapter types: a real GPU first, the software driver
@@ -105,14 +105,8 @@ impl GpuContext {
         self.kernel.get_or_init(|| Kernel::new(&self.device))
     }
 
-    pub(super) fn small_kernels(&self) -> &[wgpu::ComputePipeline] {
-        self.small_kernels.get_or_init(|| {
-            let k = self.kernel();
-            small_scene_entries()
-                .iter()
-                .map(|entry| compute_pipeline(&self.device, &k.module, &k.trace_pipeline_layout, entry))
-                .collect()
-        })
+    pub(super) fn small_kernels(&self) -> &Arc<SmallKernels> {
+        self.small_kernels.get_or_init(|| Arc::new(SmallKernels::new(&self.device, self.kernel())))
     }
 
     /// The adapter (surface capabilities are asked of it).

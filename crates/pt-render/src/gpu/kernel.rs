@@ -1,8 +1,11 @@
 //! The kernel module and its compute pipelines.
 
+use std::sync::OnceLock;
+
+use pt_core::FrameParams;
 use pt_core::Geometry;
 use pt_core::bsdf::glow_probability;
-use pt_core::integrator::{SamplerKind, connects};
+use pt_core::integrator::{SamplerKind, connects, roulette_acts};
 use pt_core::small_scene::SMALL_SCENE_SIZES;
 
 use super::KERNEL_SPV;
@@ -74,26 +77,37 @@ impl SmallCode {
 }
 
 /// What a small-scene entry point compiles in beside its capacity: the
-/// sampler and the optional code.
+/// sampler, the optional code, and Russian roulette's code or not.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub(super) struct SmallVariant {
     pub(super) sampler: SamplerKind,
     pub(super) code: SmallCode,
+    /// Whether the roulette's code is in (else the name ends in
+    /// `_noroulette`).
+    pub(super) roulette: bool,
 }
 
 impl SmallVariant {
     /// Every variant, in the kernel's order: samplers in
-    /// `SamplerKind::ALL`'s order, each with every [`SmallCode`].
+    /// `SamplerKind::ALL`'s order, each with every [`SmallCode`], each with
+    /// the roulette's code and without it.
     fn all() -> impl Iterator<Item = SmallVariant> {
-        SamplerKind::ALL.into_iter().flat_map(|sampler| SmallCode::ALL.map(|code| SmallVariant { sampler, code }))
+        SamplerKind::ALL.into_iter().flat_map(|sampler| {
+            SmallCode::ALL
+                .into_iter()
+                .flat_map(move |code| [true, false].map(move |roulette| SmallVariant { sampler, code, roulette }))
+        })
     }
 
-    /// The variant integrator `flags` need: their sampler, the connections'
-    /// code only where they make connections, and the glow lobe's only
-    /// where they have it or the connections (leaving code out where the
-    /// flags use none of it renders the same samples, faster on lavapipe,
-    /// which would run it masked).
-    pub(super) fn of(flags: u32) -> Self {
+    /// The variant a frame of `params` needs: the sampler its flags pick,
+    /// the connections' code only where they make connections, the glow
+    /// lobe's only where they have it or the connections, and the
+    /// roulette's only where it can act on a path
+    /// (`pt_core::integrator::roulette_acts`). Leaving code out where the
+    /// frame uses none of it renders the same samples, faster on lavapipe,
+    /// which would run it masked.
+    pub(super) fn of(params: &FrameParams) -> Self {
+        let flags = params.flags;
         let code = if connects(flags) {
             SmallCode::Connected
         } else if glow_probability(flags) > 0.0 {
@@ -101,7 +115,7 @@ impl SmallVariant {
         } else {
             SmallCode::Bare
         };
-        Self { sampler: SamplerKind::of(flags), code }
+        Self { sampler: SamplerKind::of(flags), code, roulette: roulette_acts(params) }
     }
 }
 
@@ -113,20 +127,51 @@ pub(super) fn small_scene_entry((walls, spheres): (u32, u32), variant: SmallVari
         SamplerKind::Sobol => "sobol",
         SamplerKind::SobolDeep => "sobol_deep",
     };
-    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{}", variant.code.suffix())
+    let roulette = if variant.roulette { "" } else { "_noroulette" };
+    format!("accumulate_small_{walls}w_{spheres}s_{sampler}{}{roulette}", variant.code.suffix())
 }
 
 /// Index of the small-scene pipeline of capacity `size` (an index in
 /// `SMALL_SCENE_SIZES`) and `variant` in [`small_scene_entries`]' order.
 pub(super) fn small_scene_index(size: usize, variant: SmallVariant) -> usize {
-    let per_size = SamplerKind::ALL.len() * SmallCode::ALL.len();
-    size * per_size + variant.sampler as usize * SmallCode::ALL.len() + variant.code as usize
+    let per_size = SamplerKind::ALL.len() * SmallCode::ALL.len() * 2;
+    size * per_size
+        + (variant.sampler as usize * SmallCode::ALL.len() + variant.code as usize) * 2
+        + !variant.roulette as usize
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
-/// each with every variant in `SmallVariant::ALL`'s order.
+/// each with every variant in `SmallVariant::all`'s order.
 pub fn small_scene_entries() -> Vec<String> {
     SMALL_SCENE_SIZES.iter().flat_map(|&size| SmallVariant::all().map(move |v| small_scene_entry(size, v))).collect()
+}
+
+/// The small-scene pipelines, one per entry point of
+/// [`small_scene_entries`], each made at its first use: a frame needs one
+/// of them, and making all of them (36) would cost every renderer's first
+/// frame their translation.
+pub(super) struct SmallKernels {
+    device: wgpu::Device,
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    entries: Vec<String>,
+    pipelines: Vec<OnceLock<wgpu::ComputePipeline>>,
+}
+
+impl SmallKernels {
+    pub(super) fn new(device: &wgpu::Device, kernel: &Kernel) -> Self {
+        let entries = small_scene_entries();
+        let pipelines = entries.iter().map(|_| OnceLock::new()).collect();
+        let (module, layout) = (kernel.module.clone(), kernel.trace_pipeline_layout.clone());
+        Self { device: device.clone(), module, layout, entries, pipelines }
+    }
+
+    /// The pipeline of entry point `index` ([`small_scene_index`]), made
+    /// now if it is the first use.
+    pub(super) fn get(&self, index: usize) -> Option<&wgpu::ComputePipeline> {
+        let entry = self.entries.get(index)?;
+        Some(self.pipelines[index].get_or_init(|| compute_pipeline(&self.device, &self.module, &self.layout, entry)))
+    }
 }
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
@@ -205,14 +250,14 @@ mod tests {
 
     /// The renderer's index of a (capacity, variant) pair finds that
     /// pair's entry point among the pipelines made in
-    /// `small_scene_entries`' order, for every pair, and the flags pick
-    /// the entry points without the connections' or the glow lobe's code
-    /// exactly where they use none of it.
+    /// `small_scene_entries`' order, for every pair, and a frame picks the
+    /// entry points without the connections', the glow lobe's or the
+    /// roulette's code exactly where it uses none of it.
     #[test]
     fn small_scene_index_finds_its_entry_point() {
         use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_NEE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
         let entries = small_scene_entries();
-        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * 9);
+        assert_eq!(entries.len(), SMALL_SCENE_SIZES.len() * 18);
         for (i, &size) in SMALL_SCENE_SIZES.iter().enumerate() {
             for v in SmallVariant::all() {
                 assert_eq!(entries[small_scene_index(i, v)], small_scene_entry(size, v));
@@ -223,15 +268,97 @@ mod tests {
         sorted.dedup();
         assert_eq!(sorted.len(), entries.len(), "every variant has its own entry point");
         let deep = FLAGS_DEFAULT | FLAG_SOBOL | FLAG_SOBOL_DEEP;
-        let entry = |flags| small_scene_entry((5, 2), SmallVariant::of(flags));
+        // Roulette from the second bounce of five: it acts.
+        let frame = |flags| FrameParams { flags, max_bounces: 5, rr_start: 2, ..Default::default() };
+        let entry = |flags| small_scene_entry((5, 2), SmallVariant::of(&frame(flags)));
         assert_eq!(entry(deep | FLAG_CONNECT), "accumulate_small_5w_2s_sobol_deep");
         assert_eq!(entry((deep | FLAG_CONNECT) & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep");
         assert_eq!(entry(deep), "accumulate_small_5w_2s_sobol_deep_unconnected");
         assert_eq!(entry(deep & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep_unconnected_noglow");
         let no_nee = (deep | FLAG_CONNECT) & !FLAG_NEE;
         assert_eq!(
-            small_scene_entry((8, 4), SmallVariant::of(no_nee)),
+            small_scene_entry((8, 4), SmallVariant::of(&frame(no_nee))),
             "accumulate_small_8w_4s_sobol_deep_unconnected"
         );
+        // Roulette from the fifth bounce of five, with NEE and a black
+        // background: no path draws a direction at its fifth vertex.
+        let last = FrameParams { rr_start: 5, ..frame(deep) };
+        assert_eq!(
+            small_scene_entry((5, 2), SmallVariant::of(&last)),
+            "accumulate_small_5w_2s_sobol_deep_unconnected_noroulette"
+        );
+    }
+
+    /// Where Russian roulette can act and where it cannot: a path draws
+    /// a direction after each of its first `max_bounces - 1` vertices, and
+    /// at its last one only without NEE or with a background that shows.
+    #[test]
+    fn roulette_acts_where_a_path_draws_past_its_start() {
+        use pt_core::glam::Vec3;
+        use pt_core::params::{FLAG_NEE, FLAGS_DEFAULT};
+        let frame =
+            |rr_start, max_bounces| FrameParams { flags: FLAGS_DEFAULT, rr_start, max_bounces, ..Default::default() };
+        assert!(roulette_acts(&frame(4, 5)));
+        assert!(!roulette_acts(&frame(5, 5)));
+        assert!(!roulette_acts(&frame(6, 5)));
+        assert!(roulette_acts(&frame(5, 16)));
+        assert!(roulette_acts(&FrameParams { flags: FLAGS_DEFAULT & !FLAG_NEE, ..frame(5, 5) }));
+        assert!(roulette_acts(&FrameParams { background: Vec3::splat(0.1), ..frame(5, 5) }));
+        assert!(!roulette_acts(&FrameParams { background: Vec3::splat(0.1), ..frame(6, 5) }));
+    }
+
+    /// Where the roulette cannot act, the path loop without its code
+    /// (`render_pixel_small` with `ROULETTE` false) returns the samples of
+    /// the full loop bit for bit, with every sampler and optional code the
+    /// kernel has, on the default scene at its bounce limit and roulette
+    /// start (5 and 5). Where it acts (from the second bounce), leaving it
+    /// out changes the samples: the comparison can fail.
+    #[test]
+    fn leaving_out_the_roulette_where_it_cannot_act_keeps_the_samples() {
+        use pt_core::integrator::{render_pixel, render_pixel_small};
+        use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
+        use pt_core::rng::Rng;
+        use pt_core::sampler::SobolSampler;
+        use pt_core::small_scene::SmallScene;
+        use pt_core::{FrameParams, PixelSamples};
+
+        use crate::scene::{RenderSettings, Scene};
+        let scene = Scene::default_scene();
+        let geometry = scene.geometry().unwrap();
+        let settings = RenderSettings { width: 16, height: 16, spp: 0, max_bounces: 5, rr_start: 5 };
+        let base = scene.frame_params(&settings, 16, 7);
+        assert!(SmallScene::<5, 2>::fits(&base, &geometry));
+        type Render = fn(u32, u32, &FrameParams, &Geometry) -> PixelSamples;
+        let d = FLAGS_DEFAULT;
+        let forms: [(u32, Render); 6] = [
+            (d & !FLAG_SOBOL, render_pixel_small::<Rng, 5, 2, false, true, false>),
+            ((d & !FLAG_SOBOL) | FLAG_CONNECT, render_pixel_small::<Rng, 5, 2, true, true, false>),
+            (d, render_pixel_small::<SobolSampler, 5, 2, false, true, false>),
+            (d & !FLAG_GLOW, render_pixel_small::<SobolSampler, 5, 2, false, false, false>),
+            (
+                d | FLAG_SOBOL_DEEP | FLAG_CONNECT,
+                render_pixel_small::<SobolSampler<{ u32::MAX }>, 5, 2, true, true, false>,
+            ),
+            (d | FLAG_SOBOL_DEEP, render_pixel_small::<SobolSampler<{ u32::MAX }>, 5, 2, false, true, false>),
+        ];
+        for (flags, render) in forms {
+            let params = FrameParams { flags, ..base };
+            assert!(!roulette_acts(&params));
+            for (x, y) in (0..16).map(|i| (i, (5 * i) % 16)) {
+                assert_eq!(
+                    render(x, y, &params, &geometry),
+                    render_pixel(x, y, &params, &geometry),
+                    "flags {flags:#x}, pixel ({x}, {y})"
+                );
+            }
+            let early = FrameParams { rr_start: 2, ..params };
+            assert!(roulette_acts(&early));
+            let differ =
+                (0..16).filter(|&x| render(x, 8, &early, &geometry) != render_pixel(x, 8, &early, &geometry)).count();
+            assert!(
+                differ > 8,
+                "flags {flags:#x}: {differ} of 16 pixels differ without the roulette from the second bounce"
+            );
+        }
     }
 }

@@ -1,12 +1,16 @@
 //! The progressive GPU renderer for one scene and image tile.
 
+use std::sync::Arc;
+
 use pt_core::small_scene::smallest_fit;
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, PARAMS, bind_group};
 use super::context::PendingRead;
-use super::kernel::{Kernel, SmallVariant, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index};
+use super::kernel::{
+    Kernel, SmallKernels, SmallVariant, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index,
+};
 use super::{GpuContext, GpuError, GpuTimer};
 
 /// The progressive GPU renderer for one scene and one tile of its image
@@ -29,9 +33,9 @@ pub struct GpuRenderer {
     params: FrameParams,
     /// The geometry block's contents, for `small_scene::smallest_fit`.
     geometry: Box<Geometry>,
-    /// The small-scene kernels (one per entry of `SMALL_SCENE_SIZES` and
-    /// sampler, `kernel::small_scene_entries`), where they are chosen.
-    accumulate_small: Option<Vec<wgpu::ComputePipeline>>,
+    /// The small-scene kernels (`kernel::small_scene_entries`), where they
+    /// are chosen.
+    accumulate_small: Option<Arc<SmallKernels>>,
     /// `smallest_fit` of the current scene and light: worked out when they
     /// change, not every frame.
     small_fit: Option<usize>,
@@ -257,7 +261,7 @@ impl GpuRenderer {
     pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
         if kernel == TraceKernel::SmallScene {
             self.set_workgroup_shape(ctx, 0);
-            self.accumulate_small = Some(ctx.small_kernels().to_vec());
+            self.accumulate_small = Some(Arc::clone(ctx.small_kernels()));
         } else {
             self.accumulate_small = None;
         }
@@ -267,7 +271,7 @@ impl GpuRenderer {
     /// small-scene kernel is chosen, the smallest capacity that holds the
     /// scene.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
-        let index = small_scene_index(self.small_fit?, SmallVariant::of(self.params.flags));
+        let index = small_scene_index(self.small_fit?, SmallVariant::of(&self.params));
         self.accumulate_small.as_ref()?.get(index)
     }
 
