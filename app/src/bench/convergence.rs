@@ -127,7 +127,7 @@ pub(crate) fn curve(
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let mut points = Vec::new();
     let mut spp = 4u32.min(max_spp);
-    while spp <= max_spp {
+    loop {
         let mut r = Renderer::new(device, params, &walls, &spheres)?;
         let start = Instant::now();
         let mut done = 0;

@@ -148,8 +148,8 @@ pub fn small_scene_entries() -> Vec<String> {
 
 /// The small-scene pipelines, one per entry point of
 /// [`small_scene_entries`], each made at its first use: a frame needs one
-/// of them, and making all of them (36) would cost every renderer's first
-/// frame their translation.
+/// of them, and making all 36 at once cost a context's first small-scene
+/// renderer half a second on lavapipe.
 pub(super) struct SmallKernels {
     device: wgpu::Device,
     module: wgpu::ShaderModule,
