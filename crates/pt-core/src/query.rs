@@ -54,7 +54,12 @@ impl Hit {
     /// Tests wall number `index`.
     #[inline]
     pub fn test_wall(&mut self, index: u32, wall: &Wall, ray: &Ray) {
-        let t = intersect_wall(wall, ray, 0.0, self.t);
+        self.take_wall(index, intersect_wall(wall, ray, 0.0, self.t));
+    }
+
+    /// Takes wall number `index` met at `t` where that is nearer.
+    #[inline]
+    pub fn take_wall(&mut self, index: u32, t: f32) {
         if t < self.t {
             *self = Self { t, kind: HitKind::Wall, index };
         }

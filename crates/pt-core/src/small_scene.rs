@@ -21,19 +21,60 @@
 //! in the capacities of [`SMALL_SCENE_SIZES`], and the renderer picks the
 //! smallest that holds the scene where the adapter is a CPU, the general
 //! form elsewhere (docs/ARCHITECTURE.md has the measured figures).
+//!
+//! The smaller capacity is for a box room: its wall slots are the floor
+//! and the ceiling, the back wall and the two side walls, in that order
+//! ([`BOX_AXES`]), each with its normal exactly on an axis
+//! ([`Wall::normal_axis`]), and it tests them with
+//! [`crate::wall::intersect_wall_on_axis`]: the same `t` in two fifths of
+//! the arithmetic. A scene of that size whose walls come in another order
+//! or lie on no axis takes the larger capacity.
 
 use crate::geometry::Geometry;
 use crate::params::FrameParams;
 use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface_of};
 use crate::ray::Ray;
 use crate::sphere::Sphere;
-use crate::wall::Wall;
+use crate::wall::{Wall, intersect_wall_on_axis};
 
 /// The capacities (walls, spheres besides the light) the kernel has a
-/// small-scene entry point for, smallest first: the default scene's five
-/// walls and two spheres, and a closed room with two walls and two spheres
-/// to spare.
+/// small-scene entry point for, smallest first: a box room's five walls
+/// ([`BOX_AXES`]: the default scene's) and two spheres, and any closed
+/// room with two walls and two spheres to spare.
 pub const SMALL_SCENE_SIZES: [(u32, u32); 2] = [(5, 2), (8, 4)];
+
+/// The axis of the normal (0 x, 1 y, 2 z) of each wall slot of the box
+/// capacity, `SMALL_SCENE_SIZES[0]`: floor and ceiling, back wall, the two
+/// side walls, the order of the scene files of `scenes/`. A scene with
+/// fewer walls fills the first slots.
+pub const BOX_AXES: [u32; 5] = [1, 1, 2, 0, 0];
+
+/// Whether the capacity with `W` walls is the box one, whose wall slots
+/// have the axes of [`BOX_AXES`].
+const fn is_box<const W: u32>() -> bool {
+    W == BOX_AXES.len() as u32
+}
+
+/// `BOX_AXES[i]` in a form that folds to a constant wherever `i` does
+/// (a read of a constant array at a variable index may not).
+#[inline(always)]
+fn box_axis(i: u32) -> u32 {
+    if i < 2 {
+        1
+    } else if i == 2 {
+        2
+    } else {
+        0
+    }
+}
+
+/// Whether the first walls of the scene (`params.wall_count` of them, at
+/// most five) have the axes of [`BOX_AXES`], in that order.
+fn walls_fit_the_box(params: &FrameParams, geometry: &Geometry) -> bool {
+    let count = params.wall_count as usize;
+    count <= BOX_AXES.len()
+        && geometry.walls[..count].iter().zip(BOX_AXES).all(|(w, axis)| w.normal_axis() == Some(axis))
+}
 
 /// The largest capacity, which the copy is made for.
 const MAX_WALLS: u32 = 8;
@@ -85,16 +126,20 @@ pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> 
     if !ShadowWalls::new(params, geometry).is_empty() {
         return None;
     }
-    SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size))
+    let box_fits = walls_fit_the_box(params, geometry);
+    SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size) && (size.0 != BOX_AXES.len() as u32 || box_fits))
 }
 
 impl<const W: u32, const S: u32> SmallScene<W, S> {
     /// Whether this capacity renders the scene exactly as the general
     /// loops: it holds every wall and sphere, and no wall can block a
     /// shadow ray (which is what a closed room with the light inside gives),
-    /// so that shadow rays test spheres only.
+    /// so that shadow rays test spheres only; and for the box capacity, the
+    /// walls have its axes ([`BOX_AXES`]).
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
-        holds(params, (W, S)) && ShadowWalls::new(params, geometry).is_empty()
+        holds(params, (W, S))
+            && ShadowWalls::new(params, geometry).is_empty()
+            && (!is_box::<W>() || walls_fit_the_box(params, geometry))
     }
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
@@ -120,7 +165,12 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
         let mut hit = Hit::none(t_max);
         unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
-                hit.test_wall(i, &self.walls[i as usize], ray);
+                if is_box::<W>() {
+                    let t = intersect_wall_on_axis(&self.walls[i as usize], box_axis(i), ray, 0.0, hit.t);
+                    hit.take_wall(i, t);
+                } else {
+                    hit.test_wall(i, &self.walls[i as usize], ray);
+                }
             }
         });
         hit
@@ -248,6 +298,38 @@ mod tests {
         assert_eq!(choice(6, 0, LIGHT), Some((8, 4)));
         assert_eq!(choice(7, 2, LIGHT), None);
         assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
+    }
+
+    #[test]
+    fn the_box_slots_fold_to_their_axes() {
+        assert_eq!((0..5).map(box_axis).collect::<Vec<_>>(), BOX_AXES);
+        assert!(is_box::<5>() && !is_box::<8>());
+        assert_eq!(SMALL_SCENE_SIZES[0].0, BOX_AXES.len() as u32, "the smaller capacity is the box");
+    }
+
+    #[test]
+    fn the_box_capacity_takes_walls_on_its_axes_in_its_order_only() {
+        let (params, geometry) = scene(5, 2, LIGHT);
+        let with_walls = |walls: &[Wall]| {
+            // Rebuilt, so that each wall knows it bounds the scene.
+            let g = Geometry::new(walls, &geometry.spheres[..2]).unwrap();
+            let p = FrameParams { wall_count: walls.len() as u32, ..params };
+            (SmallScene::<5, 2>::fits(&p, &g), smallest_fit(&p, &g).map(|i| SMALL_SCENE_SIZES[i]))
+        };
+        let [floor, ceiling, back, left, right, _] = crate::test_support::closed_room();
+        assert_eq!(with_walls(&[floor, ceiling, back, left, right]), (true, Some((5, 2))));
+        assert_eq!(with_walls(&[floor, ceiling, back]), (true, Some((5, 2))), "the first slots");
+        // The side walls first: the slots' axes differ, the larger capacity
+        // (every wall tested in full) takes the scene.
+        assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 4))));
+        // A floor whose edges are turned in its plane is still on its axis;
+        // a tilted ceiling is not.
+        let turned =
+            Wall::new(Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, -1.0), floor.albedo);
+        assert_eq!(with_walls(&[turned, ceiling, back, left, right]), (true, Some((5, 2))));
+        let tilted =
+            Wall::new(ceiling.corner, ceiling.edge_u, ceiling.edge_v + Vec3::new(0.0, 0.01, 0.0), ceiling.albedo);
+        assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 4))));
     }
 
     /// Rays from random points in the room in random directions, and from
