@@ -140,7 +140,7 @@ pub fn component(v: Vec3, k: u32) -> f32 {
 
 /// [`intersect_wall`] for a wall whose [`Wall::normal_axis`] is `k`, known
 /// where the test is compiled: the same `t` from the same arithmetic with
-/// the terms that multiply a zero left out. Of its 15 multiplies, 9
+/// the terms that multiply a zero left out. Of its 15 multiplies, 17
 /// subtractions and additions and 1 division it keeps 6, 7 and 1.
 ///
 /// With `n = +-e_k` the dot products `n . d` and `n . (corner - o)` are
