@@ -591,6 +591,9 @@ struct Frame<'a> {
     geometry: &'a Geometry,
     walls: u32,
     spheres: u32,
+    /// Each wall's `Wall::normal_axis`: where it has one, its test is
+    /// `intersect_wall_on_axis`, the same `t` in fewer operations.
+    wall_axes: [Option<u32>; MAX_WALLS],
     /// The walls that can block a shadow ray (`ShadowWalls`), in order.
     shadow_walls: [u32; MAX_WALLS],
     shadow_wall_count: usize,
@@ -624,6 +627,7 @@ impl<'a> Frame<'a> {
             geometry,
             walls,
             spheres,
+            wall_axes: geometry.walls.map(|w| w.normal_axis()),
             shadow_walls,
             shadow_wall_count,
             nee: params.flags & FLAG_NEE != 0,
@@ -651,6 +655,43 @@ fn intersect_wall(w: &pt_core::Wall, o: V3, d: V3, t_max: F) -> F {
     let (lo, hi) = (F::splat(-EDGE_SLACK), F::splat(1.0 + EDGE_SLACK));
     let ok = !denom.eq(F::splat(0.0)) & t.gt(F::splat(0.0)) & t.lt(t_max) & a.ge(lo) & a.le(hi) & b.ge(lo) & b.le(hi);
     sel(ok, t, t_max)
+}
+
+/// `pt_core::wall::intersect_wall_on_axis` in (0, `t_max`) per lane, for a
+/// wall whose normal lies on axis `k`: what [`intersect_wall`] returns.
+#[inline(always)]
+fn intersect_wall_on_axis(w: &pt_core::Wall, k: u32, o: V3, d: V3, t_max: F) -> F {
+    let axis = |v: V3, k: u32| match k {
+        0 => v.x,
+        1 => v.y,
+        _ => v.z,
+    };
+    let (i, j) = match k {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let (corner, u, v) = (w.corner.to_array(), w.coord_u.to_array(), w.coord_v.to_array());
+    let denom = axis(d, k);
+    let t = (F::splat(corner[k as usize]) - axis(o, k)) / denom;
+    let qi = (axis(o, i) + axis(d, i) * t) - F::splat(corner[i as usize]);
+    let qj = (axis(o, j) + axis(d, j) * t) - F::splat(corner[j as usize]);
+    let a = qi * F::splat(u[i as usize]) + qj * F::splat(u[j as usize]);
+    let b = qi * F::splat(v[i as usize]) + qj * F::splat(v[j as usize]);
+    let (lo, hi) = (F::splat(-EDGE_SLACK), F::splat(1.0 + EDGE_SLACK));
+    let ok = !denom.eq(F::splat(0.0)) & t.gt(F::splat(0.0)) & t.lt(t_max) & a.ge(lo) & a.le(hi) & b.ge(lo) & b.le(hi);
+    sel(ok, t, t_max)
+}
+
+/// Wall `i` of the frame met in (0, `t_max`) per lane, by the test on its
+/// axis where it has one.
+#[inline(always)]
+fn wall_t(frame: &Frame, i: u32, o: V3, d: V3, t_max: F) -> F {
+    let w = &frame.geometry.walls[i as usize];
+    match frame.wall_axes[i as usize] {
+        Some(k) => intersect_wall_on_axis(w, k, o, d, t_max),
+        None => intersect_wall(w, o, d, t_max),
+    }
 }
 
 /// `intersect_sphere` in (0, `t_max`) per lane.
@@ -1138,7 +1179,7 @@ fn nearest_wall(frame: &Frame, o: V3, d: V3, skip_wall: U) -> (F, U, M) {
     let mut index = U::splat(0);
     let mut found = M::splat(false);
     for i in 0..frame.walls {
-        let ti = intersect_wall(&frame.geometry.walls[i as usize], o, d, t);
+        let ti = wall_t(frame, i, o, d, t);
         let nearer = ti.lt(t) & !skip_wall.eq(U::splat(i));
         t = sel(nearer, ti, t);
         index = selu(nearer, U::splat(i), index);
@@ -1233,7 +1274,7 @@ fn connection(frame: &Frame, n: V3, origin: V3, scatter: &Scatter, u: (F, F), v:
 fn occluded(frame: &Frame, o: V3, d: V3, skip_wall: U, t_max: F, m: M) -> M {
     let mut blocked = M::splat(false);
     for &i in &frame.shadow_walls[..frame.shadow_wall_count] {
-        let t = intersect_wall(&frame.geometry.walls[i as usize], o, d, t_max);
+        let t = wall_t(frame, i, o, d, t_max);
         blocked = blocked | (t.lt(t_max) & !skip_wall.eq(U::splat(i)));
     }
     for s in &frame.geometry.spheres[..frame.spheres as usize] {
