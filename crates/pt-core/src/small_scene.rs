@@ -49,10 +49,10 @@ pub const SMALL_SCENE_SIZES: [(u32, u32); 2] = [(5, 2), (8, 4)];
 /// fewer walls fills the first slots.
 pub const BOX_AXES: [u32; 5] = [1, 1, 2, 0, 0];
 
-/// Whether the capacity with `W` walls is the box one, whose wall slots
-/// have the axes of [`BOX_AXES`].
-const fn is_box<const W: u32>() -> bool {
-    W == BOX_AXES.len() as u32
+/// Whether the capacity with `walls` walls is the box one, whose wall
+/// slots have the axes of [`BOX_AXES`].
+const fn is_box(walls: u32) -> bool {
+    walls == BOX_AXES.len() as u32
 }
 
 /// `BOX_AXES[i]` in a form that folds to a constant wherever `i` does
@@ -115,9 +115,12 @@ pub struct SmallScene<const W: u32, const S: u32> {
     sphere_count: u32,
 }
 
-/// Whether capacity `(walls, spheres)` holds the scene's counts.
-fn holds(params: &FrameParams, (walls, spheres): (u32, u32)) -> bool {
-    params.wall_count <= walls && params.sphere_count <= spheres
+/// Whether capacity `(walls, spheres)` holds the scene's counts and, for
+/// the box capacity, its walls ([`BOX_AXES`]).
+fn holds(params: &FrameParams, geometry: &Geometry, (walls, spheres): (u32, u32)) -> bool {
+    params.wall_count <= walls
+        && params.sphere_count <= spheres
+        && (!is_box(walls) || walls_fit_the_box(params, geometry))
 }
 
 /// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that fits
@@ -126,8 +129,7 @@ pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> 
     if !ShadowWalls::new(params, geometry).is_empty() {
         return None;
     }
-    let box_fits = walls_fit_the_box(params, geometry);
-    SMALL_SCENE_SIZES.iter().position(|&size| holds(params, size) && (size.0 != BOX_AXES.len() as u32 || box_fits))
+    SMALL_SCENE_SIZES.iter().position(|&size| holds(params, geometry, size))
 }
 
 impl<const W: u32, const S: u32> SmallScene<W, S> {
@@ -137,9 +139,7 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
     /// so that shadow rays test spheres only; and for the box capacity, the
     /// walls have its axes ([`BOX_AXES`]).
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
-        holds(params, (W, S))
-            && ShadowWalls::new(params, geometry).is_empty()
-            && (!is_box::<W>() || walls_fit_the_box(params, geometry))
+        holds(params, geometry, (W, S)) && ShadowWalls::new(params, geometry).is_empty()
     }
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
@@ -165,7 +165,7 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
         let mut hit = Hit::none(t_max);
         unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
-                if is_box::<W>() {
+                if is_box(W) {
                     let t = intersect_wall_on_axis(&self.walls[i as usize], box_axis(i), ray, 0.0, hit.t);
                     hit.take_wall(i, t);
                 } else {
@@ -303,7 +303,7 @@ mod tests {
     #[test]
     fn the_box_slots_fold_to_their_axes() {
         assert_eq!((0..5).map(box_axis).collect::<Vec<_>>(), BOX_AXES);
-        assert!(is_box::<5>() && !is_box::<8>());
+        assert!(is_box(5) && !is_box(8));
         assert_eq!(SMALL_SCENE_SIZES[0].0, BOX_AXES.len() as u32, "the smaller capacity is the box");
     }
 
