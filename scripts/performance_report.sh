@@ -6,6 +6,7 @@
 #   scripts/performance_report.sh          the default scene, then the suite
 #   scripts/performance_report.sh suite    the scene suite only
 #   scripts/performance_report.sh holdout  the held-out scenes only
+#   scripts/performance_report.sh probe    the probe scenes only
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p pathtracer
@@ -23,14 +24,16 @@ agreement() {
     done
 }
 
-if [ "${1:-all}" = holdout ]; then
-    # The held-out scenes (scenes/holdout/): the same measurements as the
-    # suite's, in their own report, docs/bench/holdout.md.
-    hold=(--suite --suite-dir scenes/holdout --width 128 --height 128 --reference-spp 8192 --out-dir "$out/holdout")
+if [ "${1:-all}" = holdout ] || [ "${1:-all}" = probe ]; then
+    # The held-out scenes (scenes/holdout/) or the probe scenes
+    # (scenes/probe/): the same measurements as the suite's, in their own
+    # report, docs/bench/holdout.md or docs/bench/probe.md.
+    set=$1
+    hold=(--suite --suite-dir "scenes/$set" --width 128 --height 128 --reference-spp 8192 --out-dir "$out/$set")
     "$bin" bench convergence "${hold[@]}" --reference-only
-    python3 scripts/mitsuba/compare.py --suite "$out/holdout/suite.tsv" "$out/holdout/mitsuba" --seeds 5
-    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/holdout/mitsuba" --report "$out/holdout.md"
-    agreement "$out/holdout/suite.tsv" "$out/holdout/mitsuba"
+    python3 scripts/mitsuba/compare.py --suite "$out/$set/suite.tsv" "$out/$set/mitsuba" --seeds 5
+    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/$set/mitsuba" --report "$out/$set.md"
+    agreement "$out/$set/suite.tsv" "$out/$set/mitsuba"
     exit 0
 fi
 
