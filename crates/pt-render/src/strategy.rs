@@ -152,6 +152,19 @@ pub const CORNER_MIN_HOT_SPOT: f32 = 6.6;
 /// the figures).
 pub const CORNER_WALLS: usize = 2;
 
+/// The smallest second-hottest spot ([`second_hot_spot`]) at which a corner
+/// or an edge takes the glow lobe at a quarter beside the connections;
+/// below it, at a tenth (`FLAG_GLOW_SPARSE`). Set on three lights, by the
+/// time to relMSE 1e-3 of a quarter against a tenth (docs/bench/probe.md,
+/// docs/PERFORMANCE.md): the suite's corner light (spots of 49 on three
+/// walls) took 0.92x the time with a quarter on lavapipe and 0.96x on the
+/// CPU; a light of radius 0.07 near the back right corner (40, 9.9, 9.9)
+/// 1.17x and 1.05x, and a light of radius 0.06 along the edge of the
+/// ceiling and the left wall (20, 18) 1.13x and 1.18x, where the lobe at
+/// a quarter took longer even than no lobe. The bound sits between 18 and
+/// 49, geometrically; a tenth was within 1.09x of a quarter on all three.
+pub const CORNER_QUARTER_HOT_SPOT: f32 = 29.0;
+
 /// The smallest share of the light's directions that must meet a wall
 /// first ([`wall_share`]) for connections to take the glow lobe's place. A
 /// connection picks its wall point along a direction from the light's
@@ -249,6 +262,20 @@ pub fn light_clearance(scene: &Scene) -> f32 {
 /// more for a light in a corner or against an edge.
 pub fn hot_walls(scene: &Scene) -> usize {
     hot_spots(scene).filter(|&h| h >= CORNER_MIN_HOT_SPOT).count()
+}
+
+/// The second-largest of [`hot_spots`] (0 with fewer than two walls):
+/// how hot the cooler of a corner's two hottest walls is.
+pub fn second_hot_spot(scene: &Scene) -> f32 {
+    let (mut first, mut second) = (0.0f32, 0.0f32);
+    for h in hot_spots(scene) {
+        if h > first {
+            (first, second) = (h, first);
+        } else if h > second {
+            second = h;
+        }
+    }
+    second
 }
 
 /// Per wall, how brightly the light lights the wall's nearest point
@@ -375,7 +402,13 @@ pub fn default_flags(scene: &Scene) -> u32 {
         return if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
-    if hot_walls(scene) >= CORNER_WALLS { connected | FLAG_GLOW } else { connected }
+    if hot_walls(scene) < CORNER_WALLS {
+        connected
+    } else if second_hot_spot(scene) >= CORNER_QUARTER_HOT_SPOT {
+        (connected & !FLAG_GLOW_SPARSE) | FLAG_GLOW
+    } else {
+        connected | FLAG_GLOW | FLAG_GLOW_SPARSE
+    }
 }
 
 /// `flags` with connections in the glow lobe's place.
@@ -701,24 +734,32 @@ mod tests {
         assert_eq!(default_flags(&default) & FLAG_GLOW, 0);
         // Moved to 0.225 from the right wall too: an edge, and the glow
         // lobe joins the connections.
+        // At a tenth: the cooler of the two hot spots, the ceiling's 17.7,
+        // is below the quarter's bound.
         let edge = with_light(0.15, Vec3::new(1.0 - 0.225, 1.7, 0.0));
         assert_eq!(hot_walls(&edge), 2);
-        assert_eq!(default_flags(&edge), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
+        assert!((second_hot_spot(&edge) - 20.0 / (4.0 * std::f32::consts::PI * 0.09)).abs() < 1e-3);
+        assert_eq!(default_flags(&edge), FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // 0.55 from it (a spot of 5.3): one hot wall again.
         let off = with_light(0.15, Vec3::new(1.0 - 0.55, 1.7, 0.0));
         assert_eq!(hot_walls(&off), 1);
         // Half a radius from the ceiling, the right and the back walls.
+        // Half a radius from three walls, spots of 49 on each: a quarter.
         let corner = with_light(0.12, Vec3::new(0.82, 1.82, -0.82));
         assert_eq!(hot_walls(&corner), 3);
+        assert!(second_hot_spot(&corner) > CORNER_QUARTER_HOT_SPOT);
+        assert_eq!(default_flags(&corner), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // The nearest wall's gap is the clearance.
         assert!((light_clearance(&corner) - 0.5).abs() < 1e-4);
         // A tinier light 0.2 below the ceiling and 0.4 from two walls is
         // 1.86 radii from the nearest: a corner by its hot spots (40, 9.9
-        // and 9.9) though not in light radii.
+        // and 9.9) though not in light radii; at a tenth.
         let tiny = with_light(0.07, Vec3::new(0.6, 1.8, -0.6));
         assert!(light_clearance(&tiny) > 1.8);
         assert_eq!(hot_walls(&tiny), 3);
-        assert_eq!(default_flags(&tiny), FLAGS_DEFAULT | FLAG_CONNECT | FLAG_SOBOL_DEEP);
+        assert_eq!(default_flags(&tiny), FLAGS_DEFAULT | FLAG_GLOW_SPARSE | FLAG_CONNECT | FLAG_SOBOL_DEEP);
+        // Without walls there is no second spot.
+        assert_eq!(second_hot_spot(&Scene { walls: Vec::new(), ..default.clone() }), 0.0);
     }
 
     #[test]
