@@ -55,7 +55,8 @@
 //! - a light in a corner or against an edge, near enough to two walls or
 //!   more to light a bright spot on each ([`hot_walls`],
 //!   [`CORNER_MIN_HOT_SPOT`]), keeps the glow lobe beside the connections
-//!   ([`CORNER_WALLS`]).
+//!   ([`CORNER_WALLS`]): at a quarter where the cooler of its two hottest
+//!   walls is very hot ([`CORNER_QUARTER_HOT_SPOT`]), else at a tenth.
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
 //! wall shadows the light ([`connections_apply`]), and large lights.
@@ -133,7 +134,9 @@ pub const GLOW_MAX_CLEARANCE: f32 = 1.1;
 /// light, radius 0.12, its centre 0.18 from three walls: 1.09x on lavapipe
 /// and 1.04x on the CPU in the latest suite run; a light
 /// of radius 0.07, its centre 0.2 from the ceiling and 0.4 from two walls:
-/// 1.19x on lavapipe and 1.16x on the CPU). The bound sits between,
+/// 1.19x on lavapipe and 1.16x on the CPU; with the share of
+/// [`CORNER_QUARTER_HOT_SPOT`], a light along an edge with spots of 20 and
+/// 18 took 0.98x and 0.95x the time of no lobe). The bound sits between,
 /// geometrically. It replaced a bound in light radii (walls within 1.25
 /// radii of the light), which left that small light out: 1.86 radii from
 /// the ceiling, its centre is nearer the ceiling than the default light's
@@ -387,7 +390,8 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// keeps the glow lobe only near a wall or sphere ([`SMALL_OPEN_CLEARANCE`]).
 /// With connections every draw comes from the Sobol
 /// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
-/// edge ([`hot_walls`]) keeps the glow lobe beside them. The glow
+/// edge ([`hot_walls`]) keeps the glow lobe beside them, at a tenth
+/// unless its walls are very hot ([`CORNER_QUARTER_HOT_SPOT`]). The glow
 /// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
 /// that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
@@ -717,6 +721,34 @@ mod tests {
         assert!(light_extent(&low) <= GLOW_MAX_EXTENT);
         assert!(wall_share(&low) < CONNECT_MIN_WALL_SHARE);
         assert_eq!(default_flags(&low), glow_flags(&low));
+    }
+
+    /// The probe scenes' defaults, as their last run measured them
+    /// (docs/bench/probe.md).
+    #[test]
+    fn the_probe_scenes_get_the_strategies_their_run_measured() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/probe");
+        let connected = with_connections(FLAGS_DEFAULT) | FLAG_SOBOL_DEEP;
+        let quarter = connected | FLAG_GLOW;
+        let tenth = quarter | FLAG_GLOW_SPARSE;
+        let expected = [
+            ("big-sphere", connected),
+            ("corner-hot", quarter),
+            ("edge-mild", tenth),
+            ("edge-small", tenth),
+            ("low-medium", sparse()),
+            ("mid-large", in_the_open()),
+            ("near-large", sparse()),
+            ("open-large", in_the_open()),
+            ("small-corner", tenth),
+            ("wall-small", connected),
+        ];
+        let count = std::fs::read_dir(&dir).unwrap().count();
+        assert_eq!(count, expected.len());
+        for (name, flags) in expected {
+            let scene = Scene::load(&dir.join(format!("{name}.toml"))).unwrap();
+            assert_eq!(default_flags(&scene), flags, "{name}");
+        }
     }
 
     #[test]
