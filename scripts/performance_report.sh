@@ -28,12 +28,12 @@ if [ "${1:-all}" = holdout ] || [ "${1:-all}" = probe ]; then
     # The held-out scenes (scenes/holdout/) or the probe scenes
     # (scenes/probe/): the same measurements as the suite's, in their own
     # report, docs/bench/holdout.md or docs/bench/probe.md.
-    set=$1
-    hold=(--suite --suite-dir "scenes/$set" --width 128 --height 128 --reference-spp 8192 --out-dir "$out/$set")
+    which=$1
+    hold=(--suite --suite-dir "scenes/$which" --width 128 --height 128 --reference-spp 8192 --out-dir "$out/$which")
     "$bin" bench convergence "${hold[@]}" --reference-only
-    python3 scripts/mitsuba/compare.py --suite "$out/$set/suite.tsv" "$out/$set/mitsuba" --seeds 5
-    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/$set/mitsuba" --report "$out/$set.md"
-    agreement "$out/$set/suite.tsv" "$out/$set/mitsuba"
+    python3 scripts/mitsuba/compare.py --suite "$out/$which/suite.tsv" "$out/$which/mitsuba" --seeds 5
+    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md"
+    agreement "$out/$which/suite.tsv" "$out/$which/mitsuba"
     exit 0
 fi
 
