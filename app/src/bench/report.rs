@@ -298,17 +298,17 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` in pt-core; probability 0.1 around large \
          lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
          distance from the light, as the irradiance of surfaces around it does.\n\
-         - Trace kernel: the small-scene kernel on CPU adapters (lavapipe), for scenes it holds (at most 8 \
-         walls and 4 spheres, and no wall that can block a shadow ray: the default scene is one); the general \
-         kernel on GPUs and for other scenes. Both make the same image, bit for bit on lavapipe. The throughput \
-         table times both at 1920x1080, 64 spp/frame: lavapipe reads every uniform value of the general kernel \
-         as a gather, lane by lane, and runs loop bodies that have nothing to do (docs/ARCHITECTURE.md). GPUs \
-         keep the general kernel, with which the H100 figures were measured, until a run there shows the other \
-         ahead.\n\
+         - Trace kernel: the small-scene kernel on native adapters, CPU (lavapipe) and GPU alike, for scenes it \
+         holds (at most 8 walls and 4 spheres, and no wall that can block a shadow ray: the default scene is \
+         one); the general kernel for other scenes and in a browser, where the other has not been measured. \
+         Both make the same image, bit for bit on lavapipe and on an NVIDIA H200. The throughput table times \
+         both at 1920x1080, 64 spp/frame: lavapipe reads every uniform value of the general kernel as a \
+         gather, lane by lane, and runs loop bodies that have nothing to do (docs/ARCHITECTURE.md); on an \
+         NVIDIA H200 (PERFORMANCE-H200.md) the small-scene kernel ran ahead too.\n\
          - Workgroup shape: 8x8 stays the default. The throughput table times 8x8, 16x4, 32x2 and 4x4 of the \
          general kernel (the only one that comes in every shape) on the \
          512x512 configuration; on lavapipe the shape only changes how invocations are batched into its \
-         8-wide SIMD (4 wide rows leave half of each vector empty). On an H100 (PERFORMANCE-H100.md) 8x8, \
+         8-wide SIMD (4 wide rows leave half of each vector empty). On an H200 (PERFORMANCE-H200.md) 8x8, \
          16x4 and 32x2 are within 1% of each other and 4x4 runs at about half their speed: a 16-invocation \
          workgroup fills half of a 32-wide warp.\n",
         vs_default(StrategyId::Independent),
@@ -327,7 +327,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
 }
 
 /// The report made on a lent GPU machine, kept beside the main one.
-const GPU_MACHINE_REPORT: &str = "PERFORMANCE-H100.md";
+const GPU_MACHINE_REPORT: &str = "PERFORMANCE-H200.md";
 
 /// Where the figures of a data-centre GPU are: the report of that name
 /// beside `report` when there is one (this machine has no such GPU).
@@ -339,14 +339,14 @@ pub(crate) fn gpu_machine_section(report: Option<&Path>) -> String {
     let beside = report.and_then(Path::parent).map(|d| d.join(GPU_MACHINE_REPORT));
     if beside.is_some_and(|p| p.exists()) {
         format!(
-            "\n## NVIDIA H100 / H200\n\nMeasured on a lent machine: [{GPU_MACHINE_REPORT}]({GPU_MACHINE_REPORT}), \
+            "\n## NVIDIA H200\n\nMeasured on a lent machine: [{GPU_MACHINE_REPORT}]({GPU_MACHINE_REPORT}), \
              made there by {command}. It names the GPU and its driver; its figures are those of the kernel as of the \
              commit that last changed it (`git log -1 docs/{GPU_MACHINE_REPORT}`). Rerun it there after a change \
              to the kernel.\n"
         )
     } else {
         format!(
-            "\n## NVIDIA H100 / H200\n\nNot measured: no such GPU was at hand. To measure, run {command} on a \
+            "\n## NVIDIA H200\n\nNot measured: no such GPU was at hand. To measure, run {command} on a \
              machine that has one, and keep the report beside this one.\n"
         )
     }

@@ -250,9 +250,15 @@ impl GpuRenderer {
     }
 
     /// The trace kernel a renderer on `ctx` starts with: the small-scene
-    /// kernel on CPU adapters, the general one on GPUs.
+    /// kernel on native adapters, where it ran ahead on lavapipe and on an
+    /// NVIDIA GPU alike (docs/ARCHITECTURE.md); the general one in a
+    /// browser, where it has not been measured.
     pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
-        if ctx.is_software() { TraceKernel::SmallScene } else { TraceKernel::General }
+        if ctx.adapter_info.backend == wgpu::Backend::BrowserWebGpu {
+            TraceKernel::General
+        } else {
+            TraceKernel::SmallScene
+        }
     }
 
     /// Chooses the form of the trace kernel (compiled now if need be; the
