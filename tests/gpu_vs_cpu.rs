@@ -207,7 +207,7 @@ fn render_with_flags(
     (used, means(&r.read_accum(ctx).unwrap()))
 }
 
-/// Both small-scene kernels (native adapters' default), each with each of the
+/// Both small-scene kernels (the renderer's default), each with each of the
 /// three samplers compiled in, with and without the connections' code and
 /// the glow lobe's, render what the general kernel renders with the same
 /// flags, seed for seed: the same tests in the same order on
@@ -252,15 +252,13 @@ fn small_scene_kernels_render_what_the_general_kernel_renders() {
     }
 }
 
-/// A renderer on a native adapter (lavapipe here; GPUs too, where it ran
-/// ahead) starts on the small-scene kernel for a scene it holds.
+/// A renderer starts on the small-scene kernel for a scene it holds.
 #[test]
-fn native_adapters_start_on_the_small_scene_kernel() {
+fn renderers_start_on_the_small_scene_kernel() {
     let ctx = gpu();
     let scene = Scene::default_scene();
     let params = scene.frame_params(&RenderSettings { width: 16, height: 16, ..scene.render }, 4, 1);
     let r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
-    assert_eq!(GpuRenderer::default_trace_kernel(&ctx), TraceKernel::SmallScene);
     assert_eq!(r.trace_kernel(), TraceKernel::SmallScene);
 }
 

@@ -298,13 +298,13 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` in pt-core; probability 0.1 around large \
          lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
          distance from the light, as the irradiance of surfaces around it does.\n\
-         - Trace kernel: the small-scene kernel on native adapters, CPU (lavapipe) and GPU alike, for scenes it \
-         holds (at most 8 walls and 4 spheres, and no wall that can block a shadow ray: the default scene is \
-         one); the general kernel for other scenes and in a browser, where the other has not been measured. \
+         - Trace kernel: the small-scene kernel for scenes it holds (at most 8 walls and 4 spheres, and no \
+         wall that can block a shadow ray: the default scene is one), the general kernel for other scenes. \
          Both make the same image, bit for bit on lavapipe and on an NVIDIA H200. The throughput table times \
          both at 1920x1080, 64 spp/frame: lavapipe reads every uniform value of the general kernel as a \
          gather, lane by lane, and runs loop bodies that have nothing to do (docs/ARCHITECTURE.md); on an \
-         NVIDIA H200 (PERFORMANCE-H200.md) the small-scene kernel ran ahead too.\n\
+         NVIDIA H200 (PERFORMANCE-H200.md) and in a browser on SwiftShader the small-scene kernel ran ahead \
+         too.\n\
          - Workgroup shape: 8x8 stays the default. The throughput table times 8x8, 16x4, 32x2 and 4x4 of the \
          general kernel (the only one that comes in every shape) on the \
          512x512 configuration; on lavapipe the shape only changes how invocations are batched into its \

@@ -19,9 +19,9 @@
 //! The price is a test per unused slot, masked off (2 to 3% of the time
 //! each), and the scene must fit ([`SmallScene::fits`]): the kernel comes
 //! in the capacities of [`SMALL_SCENE_SIZES`], and the renderer picks the
-//! smallest that holds the scene on native adapters, CPUs and GPUs alike,
-//! and the general form for other scenes and in a browser
-//! (docs/ARCHITECTURE.md has the measured figures).
+//! smallest that holds the scene, the general form for other scenes: on
+//! every adapter measured, CPU, browser and GPU alike, it ran ahead
+//! (docs/ARCHITECTURE.md has the figures).
 //!
 //! The smaller capacity is for a box room: its wall slots are the floor
 //! and the ceiling, the back wall and the two side walls, in that order

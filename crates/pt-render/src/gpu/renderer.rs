@@ -104,7 +104,6 @@ impl GpuRenderer {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
-        let kernel = Self::default_trace_kernel(ctx);
         let mut renderer = Self {
             device,
             queue: ctx.queue.clone(),
@@ -127,7 +126,10 @@ impl GpuRenderer {
             samples_done: 0,
             trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
         };
-        renderer.set_trace_kernel(ctx, kernel);
+        // The small-scene kernel wherever the scene fits it: it ran ahead on
+        // every adapter measured, lavapipe, SwiftShader in a browser and an
+        // NVIDIA GPU (docs/ARCHITECTURE.md), with the same image.
+        renderer.set_trace_kernel(ctx, TraceKernel::SmallScene);
         Ok(renderer)
     }
 
@@ -249,20 +251,8 @@ impl GpuRenderer {
         self.accumulate_small = None;
     }
 
-    /// The trace kernel a renderer on `ctx` starts with: the small-scene
-    /// kernel on native adapters, where it ran ahead on lavapipe and on an
-    /// NVIDIA GPU alike (docs/ARCHITECTURE.md); the general one in a
-    /// browser, where it has not been measured.
-    pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
-        if ctx.adapter_info.backend == wgpu::Backend::BrowserWebGpu {
-            TraceKernel::General
-        } else {
-            TraceKernel::SmallScene
-        }
-    }
-
     /// Chooses the form of the trace kernel (compiled now if need be; the
-    /// renderer starts with the adapter's default). The small-scene kernel
+    /// renderer starts with the small-scene kernel). The small-scene kernel
     /// comes in the default 8x8 shape only.
     pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
         if kernel == TraceKernel::SmallScene {
