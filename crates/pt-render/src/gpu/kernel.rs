@@ -155,7 +155,7 @@ pub(super) struct SmallKernels {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
     entries: Vec<String>,
-    pipelines: Vec<OnceLock<wgpu::ComputePipeline>>,
+    pipelines: Vec<OnceLock<Option<wgpu::ComputePipeline>>>,
 }
 
 impl SmallKernels {
@@ -167,11 +167,38 @@ impl SmallKernels {
     }
 
     /// The pipeline of entry point `index` ([`small_scene_index`]), made
-    /// now if it is the first use.
+    /// now if it is the first use; `None` where the driver could not make
+    /// it: the renderer then traces with the general kernel, which makes
+    /// the same image.
     pub(super) fn get(&self, index: usize) -> Option<&wgpu::ComputePipeline> {
         let entry = self.entries.get(index)?;
-        Some(self.pipelines[index].get_or_init(|| compute_pipeline(&self.device, &self.module, &self.layout, entry)))
+        self.pipelines[index].get_or_init(|| checked_pipeline(&self.device, &self.module, &self.layout, entry)).as_ref()
     }
+}
+
+/// [`compute_pipeline`], or `None` where making it raised an error. Each
+/// small-scene entry point unrolls the whole scene into one invocation's
+/// registers, far more code and state than the general kernel's, and only
+/// some drivers have compiled it (docs/ARCHITECTURE.md); a driver that
+/// cannot should cost speed, not the render. A browser reports errors only
+/// after this call returns, so there the pipeline is taken as made.
+fn checked_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+) -> Option<wgpu::ComputePipeline> {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let scopes = [wgpu::ErrorFilter::Internal, wgpu::ErrorFilter::OutOfMemory, wgpu::ErrorFilter::Validation]
+            .map(|filter| device.push_error_scope(filter));
+        let pipeline = compute_pipeline(device, module, layout, entry);
+        // Every scope is popped, innermost first, before any is looked at.
+        let errors: Vec<_> = scopes.into_iter().rev().map(|s| pollster::block_on(s.pop())).collect();
+        errors.iter().all(Option::is_none).then_some(pipeline)
+    }
+    #[cfg(target_arch = "wasm32")]
+    Some(compute_pipeline(device, module, layout, entry))
 }
 
 /// The workgroup shapes the kernel has an `accumulate` entry point for:
@@ -247,6 +274,19 @@ pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A small-scene pipeline that cannot be made is `None`, its error
+    /// caught there: the context reports no failure, and the other entry
+    /// points are made as before.
+    #[test]
+    fn a_small_scene_pipeline_that_cannot_be_made_is_none() {
+        let ctx = crate::gpu::GpuContext::new().expect("GPU tests need a Vulkan adapter (lavapipe in CI)");
+        let mut small = SmallKernels::new(&ctx.device, ctx.kernel());
+        small.entries[0] = "no_such_entry_point".into();
+        assert!(small.get(0).is_none());
+        assert!(small.get(1).is_some());
+        ctx.wait().expect("the error was caught where the pipeline was made");
+    }
 
     /// The renderer's index of a (capacity, variant) pair finds that
     /// pair's entry point among the pipelines made in
