@@ -299,7 +299,9 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
          distance from the light, as the irradiance of surfaces around it does.\n\
          - Trace kernel: the small-scene kernel for scenes it holds (at most 8 walls and 4 spheres, and no \
-         wall that can block a shadow ray: the default scene is one), the general kernel for other scenes. \
+         wall that can block a shadow ray: the default scene is one) on software adapters (lavapipe, \
+         SwiftShader) and NVIDIA GPUs, the general kernel for other scenes and other GPUs, where it has not \
+         been measured. \
          Both make the same image, bit for bit on lavapipe and on an NVIDIA H200. The throughput table times \
          both at 1920x1080, 64 spp/frame: lavapipe reads every uniform value of the general kernel as a \
          gather, lane by lane, and runs loop bodies that have nothing to do (docs/ARCHITECTURE.md); on an \

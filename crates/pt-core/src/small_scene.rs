@@ -19,9 +19,9 @@
 //! The price is a test per unused slot, masked off (2 to 3% of the time
 //! each), and the scene must fit ([`SmallScene::fits`]): the kernel comes
 //! in the capacities of [`SMALL_SCENE_SIZES`], and the renderer picks the
-//! smallest that holds the scene, the general form for other scenes: on
-//! every adapter measured, CPU, browser and GPU alike, it ran ahead
-//! (docs/ARCHITECTURE.md has the figures).
+//! smallest that holds the scene on the adapters where it ran ahead
+//! (software ones and NVIDIA's), the general form for other scenes and
+//! other adapters (docs/ARCHITECTURE.md has the figures).
 //!
 //! The smaller capacity is for a box room: its wall slots are the floor
 //! and the ceiling, the back wall and the two side walls, in that order

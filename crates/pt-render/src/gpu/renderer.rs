@@ -126,10 +126,7 @@ impl GpuRenderer {
             samples_done: 0,
             trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
         };
-        // The small-scene kernel wherever the scene fits it: it ran ahead on
-        // every adapter measured, lavapipe, SwiftShader in a browser and an
-        // NVIDIA GPU (docs/ARCHITECTURE.md), with the same image.
-        renderer.set_trace_kernel(ctx, TraceKernel::SmallScene);
+        renderer.set_trace_kernel(ctx, Self::default_trace_kernel(ctx));
         Ok(renderer)
     }
 
@@ -251,8 +248,25 @@ impl GpuRenderer {
         self.accumulate_small = None;
     }
 
+    /// The trace kernel a renderer on `ctx` starts with: the small-scene
+    /// kernel (for the scenes it holds) on the adapters where it was
+    /// measured ahead, software ones (lavapipe, SwiftShader in a browser)
+    /// and NVIDIA's; the general kernel on the others (AMD, Intel, Apple
+    /// GPUs), whose compilers may keep the unrolled scene in registers
+    /// less well, until a run there says otherwise (`pathtracer bench
+    /// throughput` times both; docs/ARCHITECTURE.md has the figures).
+    pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
+        const NVIDIA: u32 = 0x10de;
+        let info = &ctx.adapter_info;
+        if info.device_type == wgpu::DeviceType::Cpu || info.vendor == NVIDIA {
+            TraceKernel::SmallScene
+        } else {
+            TraceKernel::General
+        }
+    }
+
     /// Chooses the form of the trace kernel (compiled now if need be; the
-    /// renderer starts with the small-scene kernel). The small-scene kernel
+    /// renderer starts with [`GpuRenderer::default_trace_kernel`]). The small-scene kernel
     /// comes in the default 8x8 shape only.
     pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
         if kernel == TraceKernel::SmallScene {
