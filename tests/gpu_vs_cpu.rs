@@ -207,8 +207,8 @@ fn render_with_flags(
     (used, means(&r.read_accum(ctx).unwrap()))
 }
 
-/// Both small-scene kernels (the default on software and NVIDIA adapters), each with each of the
-/// three samplers compiled in, with and without the connections' code and
+/// Both small-scene kernels (the default on software and NVIDIA adapters),
+/// each with each of the three samplers compiled in, with and without the connections' code and
 /// the glow lobe's, render what the general kernel renders with the same
 /// flags, seed for seed: the same tests in the same order on
 /// a copy of the same numbers. The default scene runs on the 5-wall,

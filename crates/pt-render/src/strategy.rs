@@ -289,7 +289,7 @@ pub fn corner_hot_spot(scene: &Scene) -> f32 {
 /// wall.
 pub fn hot_spots(scene: &Scene) -> impl Iterator<Item = f32> + '_ {
     let c = scene.light.center;
-    let area: f32 = scene.walls.iter().map(|w| w.wall.edge_u.cross(w.wall.edge_v).length()).sum();
+    let area: f32 = scene.walls.iter().map(|w| w.wall.area()).sum();
     scene
         .walls
         .iter()
@@ -372,7 +372,7 @@ pub fn wall_share(scene: &Scene) -> f32 {
 /// walls and spheres; 0 for a scene with no surfaces.
 pub fn mean_albedo(scene: &Scene) -> f32 {
     let mean = |a: Vec3| (a.x + a.y + a.z) / 3.0;
-    let walls = scene.walls.iter().map(|w| (w.wall.edge_u.cross(w.wall.edge_v).length(), mean(w.wall.albedo)));
+    let walls = scene.walls.iter().map(|w| (w.wall.area(), mean(w.wall.albedo)));
     let spheres =
         scene.spheres.iter().map(|s| (4.0 * std::f32::consts::PI * s.sphere.radius.powi(2), mean(s.sphere.albedo)));
     let (area, weighted) =

@@ -124,7 +124,8 @@ impl GpuContext {
         }
     }
 
-    /// Whether this adapter is a software rasteriser (lavapipe).
+    /// Whether this adapter is a software rasteriser (lavapipe; SwiftShader
+    /// in a browser).
     pub fn is_software(&self) -> bool {
         self.adapter_info.device_type == wgpu::DeviceType::Cpu
     }

@@ -257,8 +257,7 @@ impl GpuRenderer {
     /// throughput` times both; docs/ARCHITECTURE.md has the figures).
     pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
         const NVIDIA: u32 = 0x10de;
-        let info = &ctx.adapter_info;
-        if info.device_type == wgpu::DeviceType::Cpu || info.vendor == NVIDIA {
+        if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
             TraceKernel::SmallScene
         } else {
             TraceKernel::General
