@@ -200,8 +200,8 @@ fn render_with_flags(
     let settings = RenderSettings { width: 37, height: 23, spp: 4, ..scene.render };
     let mut params = scene.frame_params(&settings, 4, 11);
     params.flags = flags;
-    let mut r = GpuRenderer::new(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
-    r.set_trace_kernel(ctx, kernel);
+    let r = GpuRenderer::with_trace_kernel(ctx, params, &scene.gpu_walls(), &scene.gpu_spheres(), kernel);
+    let mut r = r.unwrap();
     let used = r.trace_kernel();
     r.submit_frame(4);
     (used, means(&r.read_accum(ctx).unwrap()))
@@ -253,8 +253,8 @@ fn small_scene_kernels_render_what_the_general_kernel_renders() {
 }
 
 /// A renderer starts on its adapter's default kernel: on a software
-/// adapter (lavapipe, where CI runs this), the small-scene kernel for a
-/// scene it holds.
+/// adapter (lavapipe, where CI runs this), the small-scene kernel
+/// specialized to a scene it holds.
 #[test]
 fn renderers_start_on_their_adapters_default_kernel() {
     let ctx = gpu();
@@ -262,9 +262,83 @@ fn renderers_start_on_their_adapters_default_kernel() {
     let params = scene.frame_params(&RenderSettings { width: 16, height: 16, ..scene.render }, 4, 1);
     let r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
     if ctx.is_software() {
-        assert_eq!(r.trace_kernel(), TraceKernel::SmallScene);
+        assert_eq!(r.trace_kernel(), TraceKernel::Specialized);
     }
     assert_eq!(r.trace_kernel(), GpuRenderer::default_trace_kernel(&ctx));
+}
+
+/// Pixels of `a` within `tolerance` (relative) of `b`, per thousand.
+fn close_per_mille(a: &[[f32; 3]], b: &[[f32; 3]], tolerance: f32) -> usize {
+    let close = a.iter().zip(b).filter(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= tolerance * (1.0 + b[k].abs())));
+    close.count() * 1000 / b.len()
+}
+
+/// The small-scene kernels with the scene compiled in (both capacities,
+/// with and without the connections' code) render the samples of the
+/// unspecialized ones: the same arithmetic on the same values, which the
+/// driver may now fold and fuse differently, so every pixel but a few
+/// (paths that a rounding turns) agrees to 1e-4. The images differ from
+/// flags to flags: each setting reaches its own pipeline.
+#[test]
+fn specialized_kernels_render_what_the_small_scene_kernels_render() {
+    use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAGS_DEFAULT};
+    let ctx = gpu();
+    let mut three_spheres = Scene::default_scene();
+    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
+    three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    let connected = (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_CONNECT;
+    for scene in [Scene::default_scene(), three_spheres] {
+        let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
+        for flags in [FLAGS_DEFAULT, connected] {
+            let (used, small) = render_with_flags(&ctx, &scene, TraceKernel::SmallScene, flags);
+            assert_eq!(used, TraceKernel::SmallScene);
+            let (used, specialized) = render_with_flags(&ctx, &scene, TraceKernel::Specialized, flags);
+            assert_eq!(used, TraceKernel::Specialized, "the scene fits");
+            assert!(small.iter().any(|p| p[0] > 0.0), "a black image proves nothing");
+            let per_mille = close_per_mille(&specialized, &small, 1e-4);
+            assert!(per_mille >= 980, "only {per_mille} per mille of the pixels match, flags {flags:#x}");
+            assert!(images.iter().all(|other| close_per_mille(&specialized, other, 1e-4) < 500), "flags {flags:#x}");
+            images.push(specialized);
+        }
+    }
+}
+
+/// A specialized renderer follows a change of scene: after new geometry
+/// and a moved light it renders, bit for bit, what a renderer made for
+/// the changed scene renders (the same constants, so the same pipeline),
+/// and not what it rendered before.
+#[test]
+fn a_specialized_renderer_follows_a_changed_scene() {
+    let ctx = gpu();
+    let before = Scene::default_scene();
+    let mut after = Scene::default_scene();
+    after.spheres[0].sphere.center.x += 0.1;
+    after.light.center.y -= 0.2;
+    let settings = RenderSettings { width: 24, height: 16, ..before.render };
+    let render = |r: &mut GpuRenderer| {
+        r.reset();
+        r.submit_frame(4);
+        means(&r.read_accum(&ctx).unwrap())
+    };
+    let make = |scene: &Scene| {
+        let params = scene.frame_params(&settings, 4, 5);
+        let r = GpuRenderer::with_trace_kernel(
+            &ctx,
+            params,
+            &scene.gpu_walls(),
+            &scene.gpu_spheres(),
+            TraceKernel::Specialized,
+        );
+        r.unwrap()
+    };
+    let mut r = make(&before);
+    let first = render(&mut r);
+    r.set_params(after.frame_params(&settings, 4, 5)).unwrap();
+    r.set_geometry(&after.gpu_walls(), &after.gpu_spheres()).unwrap();
+    assert_eq!(r.trace_kernel(), TraceKernel::Specialized);
+    let changed = render(&mut r);
+    assert_eq!(changed, render(&mut make(&after)));
+    assert!(close_per_mille(&changed, &first, 1e-4) < 500, "the change shows");
 }
 
 /// A scene the small-scene kernel cannot render exactly (a fifth sphere, or

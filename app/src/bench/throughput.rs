@@ -148,7 +148,8 @@ pub fn throughput(ctx: Option<&GpuContext>, reps: usize, scene: &Scene) -> Resul
             // the other shapes where the configuration asks for them.
             let mut setups = vec![GpuSetup::Default];
             if cfg.both_kernels {
-                setups.push(GpuSetup::OtherKernel);
+                let default = GpuRenderer::default_trace_kernel(ctx);
+                setups.extend(TraceKernel::ALL.into_iter().filter(|&k| k != default).map(GpuSetup::Kernel));
             }
             if cfg.all_shapes {
                 // Shapes are compared on the general kernel, the only one that
@@ -184,8 +185,8 @@ const WARM_UP_SECONDS: f64 = 0.5;
 enum GpuSetup {
     /// The renderer's own choice for the adapter, in the default shape.
     Default,
-    /// The other form of the trace kernel, in the default shape.
-    OtherKernel,
+    /// Another form of the trace kernel, in the default shape.
+    Kernel(TraceKernel),
     /// The general kernel in `WORKGROUP_SHAPES[i]`.
     Shape(usize),
 }
@@ -205,13 +206,7 @@ fn time_gpu(
     let mut shape = 0;
     match setup {
         GpuSetup::Default => {}
-        GpuSetup::OtherKernel => {
-            let other = match r.trace_kernel() {
-                TraceKernel::General => TraceKernel::SmallScene,
-                TraceKernel::SmallScene => TraceKernel::General,
-            };
-            r.set_trace_kernel(ctx, other);
-        }
+        GpuSetup::Kernel(kernel) => r.set_trace_kernel(ctx, kernel),
         GpuSetup::Shape(i) => {
             r.set_workgroup_shape(ctx, i);
             shape = i;

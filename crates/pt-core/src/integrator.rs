@@ -457,6 +457,30 @@ pub fn render_pixel_small<
     pixel_samples::<Smp, _, _, CONNECT, GLOW, ROULETTE>(x, y, params, geometry, &scene, &mut NoRayCount)
 }
 
+/// [`render_pixel_small`] with the scene's values taken from `constants`
+/// where they were set (`small_scene::scene_constants`): the same samples,
+/// from values a driver can fold into the code when they are compiled in
+/// as specialization constants. Unset (a first word of 0), it is
+/// `render_pixel_small`.
+pub fn render_pixel_specialized<
+    Smp: Sampler,
+    const W: u32,
+    const S: u32,
+    const CONNECT: bool,
+    const GLOW: bool,
+    const ROULETTE: bool,
+    const N: usize,
+>(
+    x: u32,
+    y: u32,
+    params: &FrameParams,
+    geometry: &Geometry,
+    constants: &[u32; N],
+) -> PixelSamples {
+    let (params, scene) = SmallScene::<W, S>::with_constants(params, geometry, constants);
+    pixel_samples::<Smp, _, _, CONNECT, GLOW, ROULETTE>(x, y, &params, geometry, &scene, &mut NoRayCount)
+}
+
 /// The three samplers the path loop can draw from, as the flags pick them:
 /// the kernel's small-scene entry points come in one form per sampler.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]

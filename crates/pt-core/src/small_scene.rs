@@ -30,6 +30,12 @@
 //! [`crate::wall::intersect_wall_on_axis`]: the same `t` in two fifths of
 //! the arithmetic. A scene of that size whose walls come in another order
 //! or lie on no axis takes the larger capacity.
+//!
+//! The copy can also come from the entry point's specialization constants
+//! ([`scene_constants`], [`SmallScene::with_constants`]): set by the host
+//! when it makes the pipeline, they let the driver fold the scene, the
+//! camera and the settings into the code, operands instead of registers,
+//! which is what lavapipe spills most.
 
 use crate::geometry::Geometry;
 use crate::params::FrameParams;
@@ -37,6 +43,7 @@ use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface_
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::wall::{Wall, intersect_wall_on_axis};
+use spirv_std::glam::Vec3;
 
 /// The capacities (walls, spheres besides the light) the kernel has a
 /// small-scene entry point for, smallest first: a box room's five walls
@@ -158,7 +165,142 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
     }
 }
 
+/// Words of a scene's constants before its walls: a marker (0 in a
+/// module whose constants were not set: read the buffers), the camera
+/// (12), the light (7), the background (3), then the image size, the
+/// bounce limit, the roulette's start, the wall and sphere counts and the
+/// flags.
+const HEAD_WORDS: usize = 30;
+/// Words per wall and per sphere.
+const WALL_WORDS: usize = 22;
+const SPHERE_WORDS: usize = 7;
+
+/// The length of the scene constants of capacity `(walls, spheres)`
+/// ([`scene_constants`]): what each small-scene entry point takes as
+/// specialization constants.
+pub const fn constant_words(walls: u32, spheres: u32) -> usize {
+    HEAD_WORDS + walls as usize * WALL_WORDS + spheres as usize * SPHERE_WORDS
+}
+
+/// Reads or writes one word of the scene constants at a fixed offset: the
+/// one list of offsets ([`visit_constants`]) serves the host, which writes
+/// them, and the kernel, which reads them.
+trait Words {
+    fn word(&mut self, at: usize, value: &mut u32);
+    #[inline(always)]
+    fn float(&mut self, at: usize, value: &mut f32) {
+        let mut bits = value.to_bits();
+        self.word(at, &mut bits);
+        *value = f32::from_bits(bits);
+    }
+    #[inline(always)]
+    fn vec3(&mut self, at: usize, v: &mut Vec3) {
+        self.float(at, &mut v.x);
+        self.float(at + 1, &mut v.y);
+        self.float(at + 2, &mut v.z);
+    }
+}
+
+/// The kernel's side: each value from its word.
+struct Read<'a, const N: usize>(&'a [u32; N]);
+
+impl<const N: usize> Words for Read<'_, N> {
+    #[inline(always)]
+    fn word(&mut self, at: usize, value: &mut u32) {
+        *value = self.0[at];
+    }
+}
+
+/// Every per-scene value the kernel reads, each at its offset: what stays
+/// the same over a render (camera, light, settings, the copy's walls and
+/// spheres); the per-frame values (frame, sample counts, seed, tile,
+/// display settings) are never in it.
+#[inline(always)]
+fn visit_constants<const W: u32, const S: u32>(
+    words: &mut impl Words,
+    params: &mut FrameParams,
+    walls: &mut [Wall; MAX_WALLS as usize],
+    spheres: &mut [Sphere; MAX_SPHERES as usize],
+) {
+    let c = &mut params.camera;
+    words.vec3(1, &mut c.position);
+    words.vec3(4, &mut c.forward);
+    words.vec3(7, &mut c.right);
+    words.vec3(10, &mut c.up);
+    let l = &mut params.light;
+    words.vec3(13, &mut l.center);
+    words.float(16, &mut l.radius);
+    words.vec3(17, &mut l.radiance);
+    words.vec3(20, &mut params.background);
+    words.word(23, &mut params.width);
+    words.word(24, &mut params.height);
+    words.word(25, &mut params.max_bounces);
+    words.word(26, &mut params.rr_start);
+    words.word(27, &mut params.wall_count);
+    words.word(28, &mut params.sphere_count);
+    words.word(29, &mut params.flags);
+    unrolled::<W>(|i| {
+        let (w, at) = (&mut walls[i as usize], HEAD_WORDS + i as usize * WALL_WORDS);
+        words.vec3(at, &mut w.corner);
+        words.vec3(at + 3, &mut w.edge_u);
+        words.vec3(at + 6, &mut w.edge_v);
+        words.vec3(at + 9, &mut w.normal);
+        words.float(at + 12, &mut w.enclosure_side);
+        words.vec3(at + 13, &mut w.coord_u);
+        words.vec3(at + 16, &mut w.coord_v);
+        words.vec3(at + 19, &mut w.albedo);
+    });
+    unrolled::<S>(|i| {
+        let (s, at) = (&mut spheres[i as usize], HEAD_WORDS + W as usize * WALL_WORDS + i as usize * SPHERE_WORDS);
+        words.vec3(at, &mut s.center);
+        words.float(at + 3, &mut s.radius);
+        words.vec3(at + 4, &mut s.albedo);
+    });
+}
+
+/// The scene constants of capacity `(W, S)` for `params` and `geometry`,
+/// `constant_words(W, S)` words: compiled into a small-scene pipeline, they
+/// let the driver fold the scene into the code (a literal operand instead
+/// of a register or a spill per value on lavapipe). The caller checks
+/// [`SmallScene::fits`].
+#[cfg(not(target_arch = "spirv"))]
+pub fn scene_constants<const W: u32, const S: u32>(params: &FrameParams, geometry: &Geometry) -> Vec<u32> {
+    struct Write(Vec<u32>);
+    impl Words for Write {
+        fn word(&mut self, at: usize, value: &mut u32) {
+            self.0[at] = *value;
+        }
+    }
+    let mut words = Write(vec![0; constant_words(W, S)]);
+    words.0[0] = 1;
+    let (mut params, mut walls, mut spheres) = (*params, [Wall::default(); 8], [Sphere::default(); 4]);
+    walls.copy_from_slice(&geometry.walls[..8]);
+    spheres.copy_from_slice(&geometry.spheres[..4]);
+    visit_constants::<W, S>(&mut words, &mut params, &mut walls, &mut spheres);
+    words.0
+}
+
 impl<const W: u32, const S: u32> SmallScene<W, S> {
+    /// The frame's parameters and the scene's copy: from `constants` where
+    /// they were set ([`scene_constants`]), the per-frame values from
+    /// `params` still; else from the buffers, as [`SmallScene::new`].
+    #[inline(always)]
+    pub fn with_constants<const N: usize>(
+        params: &FrameParams,
+        geometry: &Geometry,
+        constants: &[u32; N],
+    ) -> (FrameParams, Self) {
+        if constants[0] == 0 {
+            (*params, Self::new(params, geometry))
+        } else {
+            let mut params = *params;
+            let (mut walls, mut spheres) = ([Wall::default(); 8], [Sphere::default(); 4]);
+            visit_constants::<W, S>(&mut Read(constants), &mut params, &mut walls, &mut spheres);
+            let (wall_count, sphere_count) = (params.wall_count.min(W), params.sphere_count.min(S));
+            (params, Self { walls, spheres, wall_count, sphere_count })
+        }
+    }
+
     /// The nearest wall hit in (0, `t_max`) but `skip_wall`, unrolled: the
     /// walls' part of `closest_hit`, and alone `first_wall`.
     #[inline(always)]
@@ -299,6 +441,40 @@ mod tests {
         assert_eq!(choice(6, 0, LIGHT), Some((8, 4)));
         assert_eq!(choice(7, 2, LIGHT), None);
         assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
+    }
+
+    /// The scene constants give back exactly the scene they were made of:
+    /// every per-scene value of the parameters and the copy's walls and
+    /// spheres, for each capacity, with the per-frame values still read
+    /// from the parameters given. Unset constants (zeros) read the buffers.
+    #[test]
+    fn scene_constants_give_back_the_scene() {
+        fn check<const W: u32, const S: u32, const N: usize>(walls: usize, spheres: usize) {
+            let (mut params, geometry) = scene(walls, spheres, LIGHT);
+            params.rr_start = 3;
+            params.flags = 0x1d7;
+            params.background = Vec3::new(0.1, 0.2, 0.3);
+            let constants: [u32; N] = scene_constants::<W, S>(&params, &geometry).try_into().expect("N words");
+            assert_eq!(N, constant_words(W, S));
+            // The frame's own values, and nothing of the scene, in the buffers.
+            let frame =
+                FrameParams { frame: 9, samples_per_frame: 3, sample_offset: 12, seed: 4, ..Default::default() };
+            let empty = Geometry::new(&[], &[]).unwrap();
+            let (got, copy) = SmallScene::<W, S>::with_constants(&frame, &empty, &constants);
+            let want = FrameParams { frame: 9, samples_per_frame: 3, sample_offset: 12, seed: 4, ..params };
+            assert_eq!(got, want);
+            let reference = SmallScene::<W, S>::new(&params, &geometry);
+            assert_eq!((copy.wall_count, copy.sphere_count), (walls as u32, spheres as u32));
+            assert_eq!(copy.walls[..walls], reference.walls[..walls]);
+            assert_eq!(copy.spheres[..spheres], reference.spheres[..spheres]);
+            // Unset: the buffers' values.
+            let (got, copy) = SmallScene::<W, S>::with_constants(&params, &geometry, &[0; N]);
+            assert_eq!(got, params);
+            assert_eq!((copy.walls, copy.spheres), (reference.walls, reference.spheres));
+        }
+        check::<5, 2, { constant_words(5, 2) }>(5, 2);
+        check::<8, 4, { constant_words(8, 4) }>(8, 4);
+        check::<8, 4, { constant_words(8, 4) }>(6, 3);
     }
 
     #[test]

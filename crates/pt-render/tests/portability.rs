@@ -11,13 +11,15 @@ use naga::back::{hlsl, msl, wgsl};
 use naga::front::spv;
 use naga::valid::{Capabilities, ModuleInfo, ValidationFlags, Validator};
 use naga::{Module, ShaderStage};
-use pt_render::KERNEL_SPV;
+use pt_render::gpu::kernel_words;
 
-/// The kernel as wgpu reads it (`wgpu::ShaderSource::SpirV`'s options).
+/// The kernel as wgpu reads it: its words as the renderer passes them
+/// (specialization constants made plain), with
+/// `wgpu::ShaderSource::SpirV`'s options.
 fn kernel() -> Module {
     let options =
         spv::Options { adjust_coordinate_space: false, strict_capabilities: true, block_ctx_dump_prefix: None };
-    spv::parse_u8_slice(KERNEL_SPV, &options).expect("naga reads the kernel")
+    spv::Frontend::new(kernel_words().into_iter(), &options).parse().expect("naga reads the kernel")
 }
 
 fn validate(module: &Module, capabilities: Capabilities, backend: &str) -> ModuleInfo {

@@ -84,8 +84,11 @@ impl Session {
         waiting: Waiting,
     ) -> Result<Self, GpuError> {
         let settings = ViewSettings::new(scene, width.max(1), height.max(1));
-        let renderer =
-            GpuRenderer::new(ctx, settings.frame_params(), &settings.scene.gpu_walls(), &settings.scene.gpu_spheres())?;
+        // Every edit changes the scene: a pipeline specialized to it would
+        // be made again at each (half a second and more on lavapipe).
+        let kernel = GpuRenderer::default_trace_kernel(ctx).unspecialized();
+        let (walls, spheres) = (settings.scene.gpu_walls(), settings.scene.gpu_spheres());
+        let renderer = GpuRenderer::with_trace_kernel(ctx, settings.frame_params(), &walls, &spheres, kernel)?;
         let blit = Blit::new(ctx, target_format);
         let blit_group = blit.bind_group(ctx, &renderer);
         let timer = if waiting == Waiting::Block { GpuTimer::new(ctx) } else { None };

@@ -13,6 +13,7 @@
 use pt_core::glam::{UVec3, Vec2, Vec4};
 use pt_core::rng::Rng;
 use pt_core::sampler::{Sampler, SobolSampler};
+use pt_core::small_scene::constant_words;
 use pt_core::{AccumPixel, FrameParams, Geometry, PixelSamples, integrator, tonemap};
 use spirv_std::memory::{Scope, Semantics};
 use spirv_std::spirv;
@@ -60,14 +61,27 @@ fn accumulate_pixel(
 /// where `ROULETTE`, with the parameters copied into the invocation's own
 /// memory too: lavapipe would otherwise gather each of them from the buffer
 /// at every read.
-fn small<Smp: Sampler, const W: u32, const S: u32, const CONNECT: bool, const GLOW: bool, const ROULETTE: bool>(
+///
+/// `constants` are the entry point's specialization constants: the
+/// scene's values (`small_scene::scene_constants`) where the host compiled
+/// them into the pipeline, zeros (read the buffers) where it did not.
+fn small<
+    Smp: Sampler,
+    const W: u32,
+    const S: u32,
+    const CONNECT: bool,
+    const GLOW: bool,
+    const ROULETTE: bool,
+    const N: usize,
+>(
     x: u32,
     y: u32,
     params: &FrameParams,
     geometry: &Geometry,
+    constants: &[u32; N],
 ) -> PixelSamples {
     let params = *params;
-    integrator::render_pixel_small::<Smp, W, S, CONNECT, GLOW, ROULETTE>(x, y, &params, geometry)
+    integrator::render_pixel_specialized::<Smp, W, S, CONNECT, GLOW, ROULETTE, N>(x, y, &params, geometry, constants)
 }
 
 macro_rules! accumulate_entry {
@@ -94,8 +108,30 @@ macro_rules! accumulate_entry {
 /// (`integrator::roulette_acts`).
 macro_rules! small_entries {
     ($name:ident, $noroulette:ident, $smp:ty, $w:literal, $s:literal, $connect:literal, $glow:literal) => {
-        accumulate_entry!($name, 8, 8, small::<$smp, $w, $s, $connect, $glow, true>);
-        accumulate_entry!($noroulette, 8, 8, small::<$smp, $w, $s, $connect, $glow, false>);
+        small_entry!($name, $smp, $w, $s, $connect, $glow, true);
+        small_entry!($noroulette, $smp, $w, $s, $connect, $glow, false);
+    };
+}
+
+/// One small-scene entry point: [`accumulate_pixel`] with [`small`], in 8 x
+/// 8 workgroups, with the scene constants of its capacity as
+/// specialization constants 0, 1, ... (`constant_words` of them).
+macro_rules! small_entry {
+    ($name:ident, $smp:ty, $w:literal, $s:literal, $connect:literal, $glow:literal, $roulette:literal) => {
+        /// [`accumulate_pixel`] with [`small`] for this capacity and code.
+        #[spirv(compute(threads(8, 8)))]
+        pub fn $name(
+            #[spirv(global_invocation_id)] id: UVec3,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] params: &FrameParams,
+            #[spirv(uniform, descriptor_set = 0, binding = 1)] geometry: &Geometry,
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
+            #[spirv(spec_constant(id = 0, default = 0))] constants: [u32; constant_words($w, $s)],
+        ) {
+            accumulate_pixel(id, params, geometry, accum, non_finite, |x, y, p, g| {
+                small::<$smp, $w, $s, $connect, $glow, $roulette, { constant_words($w, $s) }>(x, y, p, g, &constants)
+            });
+        }
     };
 }
 

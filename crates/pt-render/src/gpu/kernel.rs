@@ -1,6 +1,6 @@
 //! The kernel module and its compute pipelines.
 
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 use pt_core::FrameParams;
 use pt_core::Geometry;
@@ -38,14 +38,33 @@ pub enum TraceKernel {
     /// on CPU adapters (lavapipe), where it measured faster
     /// (docs/ARCHITECTURE.md).
     SmallScene,
+    /// The small-scene kernel with the scene's values (camera, light,
+    /// settings, walls and spheres: `small_scene::scene_constants`)
+    /// compiled into the pipeline as specialization constants, so that
+    /// the driver folds them into the code: a pipeline per scene and
+    /// strategy, made when the renderer first needs it (half a second and
+    /// more on lavapipe). For renders of a fixed scene on software
+    /// adapters; scenes that fit no capacity use `General`.
+    Specialized,
 }
 
 impl TraceKernel {
+    /// Every form.
+    pub const ALL: [TraceKernel; 3] = [TraceKernel::General, TraceKernel::SmallScene, TraceKernel::Specialized];
+
+    /// The form that makes no pipeline per scene: `SmallScene` for
+    /// `Specialized`, else itself. For a renderer whose scene changes
+    /// as the user edits it.
+    pub fn unspecialized(self) -> Self {
+        if self == Self::Specialized { Self::SmallScene } else { self }
+    }
+
     /// Its name in reports.
     pub fn name(self) -> &'static str {
         match self {
             Self::General => "general kernel",
             Self::SmallScene => "small-scene kernel",
+            Self::Specialized => "small-scene kernel, scene compiled in",
         }
     }
 }
@@ -156,14 +175,30 @@ pub(super) struct SmallKernels {
     layout: wgpu::PipelineLayout,
     entries: Vec<String>,
     pipelines: Vec<OnceLock<Option<wgpu::ComputePipeline>>>,
+    /// The latest specialized pipelines, by entry point index and scene
+    /// constants, newest last: renderers of one scene and strategy (a
+    /// benchmark's seeds and sample counts) share one.
+    specialized: Mutex<Vec<SpecializedPipeline>>,
 }
+
+/// A pipeline of one small-scene entry point with its constants compiled
+/// in (`None`: the driver could not make it).
+struct SpecializedPipeline {
+    index: usize,
+    constants: Vec<u32>,
+    pipeline: Option<wgpu::ComputePipeline>,
+}
+
+/// How many specialized pipelines a context keeps: each holds its own
+/// compiled code (about a megabyte on lavapipe).
+const SPECIALIZED_KEPT: usize = 32;
 
 impl SmallKernels {
     pub(super) fn new(device: &wgpu::Device, kernel: &Kernel) -> Self {
         let entries = small_scene_entries();
         let pipelines = entries.iter().map(|_| OnceLock::new()).collect();
         let (module, layout) = (kernel.module.clone(), kernel.trace_pipeline_layout.clone());
-        Self { device: device.clone(), module, layout, entries, pipelines }
+        Self { device: device.clone(), module, layout, entries, pipelines, specialized: Mutex::default() }
     }
 
     /// The pipeline of entry point `index` ([`small_scene_index`]), made
@@ -174,6 +209,95 @@ impl SmallKernels {
         let entry = self.entries.get(index)?;
         self.pipelines[index].get_or_init(|| checked_pipeline(&self.device, &self.module, &self.layout, entry)).as_ref()
     }
+
+    /// The pipeline of entry point `index` with specialization constants
+    /// `constants` (`small_scene::scene_constants` of its capacity), made
+    /// now unless one of the last few made has the same; `None` where the
+    /// driver could not make it (the renderer then runs the unspecialized
+    /// pipeline, which makes the same image up to rounding).
+    pub(super) fn specialized(&self, index: usize, constants: &[u32]) -> Option<wgpu::ComputePipeline> {
+        let entry = self.entries.get(index)?;
+        // A poisoned lock only means another renderer's thread panicked
+        // while holding it; the list itself is always whole.
+        let mut kept = self.specialized.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(k) = kept.iter().find(|k| k.index == index && k.constants == constants) {
+            return k.pipeline.clone();
+        }
+        let words = specialized_spirv(KERNEL_SPV, constants);
+        let module = trusted_module(&self.device, "pt-kernel, specialized", std::borrow::Cow::Owned(words));
+        let pipeline = checked_pipeline(&self.device, &module, &self.layout, entry);
+        if kept.len() == SPECIALIZED_KEPT {
+            kept.remove(0);
+        }
+        kept.push(SpecializedPipeline { index, constants: constants.to_vec(), pipeline: pipeline.clone() });
+        pipeline
+    }
+}
+
+/// SPIR-V's opcodes and decoration that [`specialized_spirv`] reads.
+const OP_CONSTANT_TRUE: u32 = 41;
+const OP_CONSTANT: u32 = 43;
+const OP_SPEC_CONSTANT_TRUE: u32 = 48;
+const OP_SPEC_CONSTANT_FALSE: u32 = 49;
+const OP_SPEC_CONSTANT: u32 = 50;
+const OP_DECORATE: u32 = 71;
+const DECORATION_SPEC_ID: u32 = 1;
+
+/// The instructions of SPIR-V module `words` after its 5-word header, as
+/// (opcode, the instruction's words).
+fn instructions(words: &[u32]) -> impl Iterator<Item = (u32, &[u32])> {
+    let mut at = 5.min(words.len());
+    std::iter::from_fn(move || {
+        let first = *words.get(at)?;
+        let len = ((first >> 16) as usize).max(1);
+        let inst = words.get(at..at + len)?;
+        at += len;
+        Some((first & 0xffff, inst))
+    })
+}
+
+/// The `SpecId` of each specialization constant of `words`, by result id.
+fn spec_ids(words: &[u32]) -> std::collections::HashMap<u32, u32> {
+    instructions(words)
+        .filter(|&(op, inst)| op == OP_DECORATE && inst.len() == 4 && inst[2] == DECORATION_SPEC_ID)
+        .map(|(_, inst)| (inst[1], inst[3]))
+        .collect()
+}
+
+/// The words of SPIR-V module `module` with every specialization
+/// constant made a plain constant: `values[id]` for the one decorated
+/// `SpecId id` where `values` has it, else its default; the `SpecId`
+/// decorations dropped. The small-scene entry points each take the same
+/// ids (0 up to their capacity's `constant_words`), so `values` sets
+/// those of every entry point: a module made with one capacity's values
+/// serves that capacity's entry points only. wgpu gets plain constants
+/// either way: nothing depends on how a front end or a driver handles
+/// specialization.
+pub fn specialized_spirv(module: &[u8], values: &[u32]) -> Vec<u32> {
+    let words: Vec<u32> =
+        module.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().expect("chunks of 4 bytes"))).collect();
+    let spec_ids = spec_ids(&words);
+    let mut out = words[..5.min(words.len())].to_vec();
+    for (op, inst) in instructions(&words) {
+        match op {
+            OP_DECORATE if inst.len() == 4 && inst[2] == DECORATION_SPEC_ID => {}
+            // (result type, result, value): 32-bit values only take `values`.
+            OP_SPEC_CONSTANT => {
+                out.push((inst[0] & 0xffff_0000) | OP_CONSTANT);
+                out.extend_from_slice(&inst[1..]);
+                if let (4, Some(&v)) = (inst.len(), spec_ids.get(&inst[2]).and_then(|&id| values.get(id as usize))) {
+                    *out.last_mut().expect("just pushed") = v;
+                }
+            }
+            // OpConstantTrue and OpConstantFalse are 41 and 42, in order.
+            OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE => {
+                out.push((inst[0] & 0xffff_0000) | (OP_CONSTANT_TRUE + op - OP_SPEC_CONSTANT_TRUE));
+                out.extend_from_slice(&inst[1..]);
+            }
+            _ => out.extend_from_slice(inst),
+        }
+    }
+    out
 }
 
 /// [`compute_pipeline`], or `None` where making it raised an error. Each
@@ -263,10 +387,24 @@ impl Kernel {
 /// `samples_per_frame` paths of at most `max_bounces + 1` segments, the
 /// object loops by counts clamped to the arrays, the shadow-wall loop by a
 /// 32-bit mask shifted each turn). What it saved: docs/ARCHITECTURE.md.
+/// Its specialization constants are set to their defaults (zeros: the
+/// small-scene entry points then read the scene from the buffers).
 pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
-    let desc = wgpu::ShaderModuleDescriptor { label: Some("pt-kernel"), source: wgpu::util::make_spirv(KERNEL_SPV) };
-    // SAFETY: see above: the kernel indexes only through Rust's bounds
-    // checks and has no unbounded loop, which is what the unchecked
+    trusted_module(device, "pt-kernel", std::borrow::Cow::Owned(kernel_words()))
+}
+
+/// The kernel module as wgpu gets it: [`KERNEL_SPV`] with its
+/// specialization constants at their defaults ([`specialized_spirv`]).
+pub fn kernel_words() -> Vec<u32> {
+    specialized_spirv(KERNEL_SPV, &[])
+}
+
+/// A shader module of the kernel's words, without naga's runtime checks
+/// ([`kernel_module`] says why that is sound).
+fn trusted_module(device: &wgpu::Device, label: &str, words: std::borrow::Cow<'_, [u32]>) -> wgpu::ShaderModule {
+    let desc = wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::SpirV(words) };
+    // SAFETY: see `kernel_module`: the kernel indexes only through Rust's
+    // bounds checks and has no unbounded loop, which is what the unchecked
     // options ask of the caller.
     unsafe { device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked()) }
 }
@@ -274,6 +412,7 @@ pub(super) fn kernel_module(device: &wgpu::Device) -> wgpu::ShaderModule {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pt_core::small_scene::constant_words;
 
     /// A small-scene pipeline that cannot be made is `None`, its error
     /// caught there: the context reports no failure, and the other entry
@@ -293,6 +432,37 @@ mod tests {
     /// `small_scene_entries`' order, for every pair, and a frame picks the
     /// entry points without the connections', the glow lobe's or the
     /// roulette's code exactly where it uses none of it.
+    /// The kernel's specialization constants are the small-scene entry
+    /// points' scene constants, ids 0 up to the largest capacity's count,
+    /// each once (the entry points share them). Specialized, each is a
+    /// plain constant with its value (or its default, 0, past the values
+    /// given), and no specialization constant or `SpecId` is left.
+    #[test]
+    fn specialization_constants_become_plain_constants() {
+        let raw: Vec<u32> = KERNEL_SPV.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().unwrap())).collect();
+        let ids = spec_ids(&raw);
+        let mut sorted: Vec<u32> = ids.values().copied().collect();
+        sorted.sort_unstable();
+        let largest = SMALL_SCENE_SIZES.iter().map(|&(w, s)| constant_words(w, s)).max().unwrap();
+        assert_eq!(sorted, (0..largest as u32).collect::<Vec<_>>());
+        let values: Vec<u32> = (0..100).map(|i| 1000 + i).collect();
+        let out = specialized_spirv(KERNEL_SPV, &values);
+        assert_eq!(out.len(), raw.len() - 4 * ids.len(), "only the decorations dropped");
+        assert!(spec_ids(&out).is_empty());
+        let mut seen = 0;
+        for (op, inst) in instructions(&out) {
+            assert!(!(OP_SPEC_CONSTANT_TRUE..=52).contains(&op), "opcode {op} left");
+            if let Some(&id) = ids.get(&inst[2.min(inst.len() - 1)]).filter(|_| op == OP_CONSTANT) {
+                assert_eq!(inst[3], values.get(id as usize).copied().unwrap_or(0), "SpecId {id}");
+                seen += 1;
+            }
+        }
+        assert_eq!(seen, ids.len());
+        // Unchanged but for the constants: the defaults give the module
+        // wgpu gets.
+        assert_eq!(kernel_words().len(), out.len());
+    }
+
     #[test]
     fn small_scene_index_finds_its_entry_point() {
         use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_NEE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};

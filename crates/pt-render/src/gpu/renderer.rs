@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use pt_core::small_scene::smallest_fit;
+use pt_core::small_scene::{SMALL_SCENE_SIZES, scene_constants, smallest_fit};
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
@@ -39,6 +39,13 @@ pub struct GpuRenderer {
     /// `smallest_fit` of the current scene and light: worked out when they
     /// change, not every frame.
     small_fit: Option<usize>,
+    /// Whether the small-scene pipeline is specialized to the scene
+    /// (`TraceKernel::Specialized`).
+    specialize: bool,
+    /// That pipeline and the constants it was made with, while they are
+    /// the current scene's: made again when the scene, the settings or
+    /// the strategy change.
+    specialized: Option<(Vec<u32>, wgpu::ComputePipeline)>,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
@@ -66,8 +73,21 @@ pub fn max_image_bytes(device: &wgpu::Device) -> u64 {
 }
 
 impl GpuRenderer {
-    /// A renderer for `params` (size, camera, light, settings) and geometry.
+    /// A renderer for `params` (size, camera, light, settings) and geometry,
+    /// on the adapter's [`GpuRenderer::default_trace_kernel`].
     pub fn new(ctx: &GpuContext, params: FrameParams, walls: &[Wall], spheres: &[Sphere]) -> Result<Self, GpuError> {
+        Self::with_trace_kernel(ctx, params, walls, spheres, Self::default_trace_kernel(ctx))
+    }
+
+    /// [`GpuRenderer::new`] on trace kernel `kernel` (a viewer that edits
+    /// the scene takes `TraceKernel::unspecialized` of the default).
+    pub fn with_trace_kernel(
+        ctx: &GpuContext,
+        params: FrameParams,
+        walls: &[Wall],
+        spheres: &[Sphere],
+        kernel: TraceKernel,
+    ) -> Result<Self, GpuError> {
         let device = ctx.device.clone();
         // A browser resolves the scope's promise only after this call
         // returns, so there errors reach the uncaptured-error handler
@@ -122,11 +142,13 @@ impl GpuRenderer {
             small_fit: smallest_fit(&params, &geometry),
             geometry,
             accumulate_small: None,
+            specialize: false,
+            specialized: None,
             next_frame: 0,
             samples_done: 0,
             trace_shape: (WORKGROUP_SIZE, WORKGROUP_SIZE),
         };
-        renderer.set_trace_kernel(ctx, Self::default_trace_kernel(ctx));
+        renderer.set_trace_kernel(ctx, kernel);
         Ok(renderer)
     }
 
@@ -173,6 +195,7 @@ impl GpuRenderer {
         }
         self.params = params;
         self.small_fit = smallest_fit(&self.params, &self.geometry);
+        self.specialize_pipeline();
         Ok(())
     }
 
@@ -184,7 +207,28 @@ impl GpuRenderer {
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
         self.small_fit = smallest_fit(&self.params, &self.geometry);
+        self.specialize_pipeline();
         Ok(())
+    }
+
+    /// Makes the specialized small-scene pipeline for the current scene,
+    /// settings and strategy, where one is chosen and the scene fits, unless
+    /// the one in hand has the same constants.
+    fn specialize_pipeline(&mut self) {
+        let (Some(size), Some(kernels), true) = (self.small_fit, &self.accumulate_small, self.specialize) else {
+            self.specialized = None;
+            return;
+        };
+        let constants = match SMALL_SCENE_SIZES[size] {
+            (5, 2) => scene_constants::<5, 2>(&self.params, &self.geometry),
+            (8, 4) => scene_constants::<8, 4>(&self.params, &self.geometry),
+            _ => unreachable!("one arm per capacity of SMALL_SCENE_SIZES (a unit test checks them)"),
+        };
+        if self.specialized.as_ref().is_some_and(|(c, _)| *c == constants) {
+            return;
+        }
+        let index = small_scene_index(size, SmallVariant::of(&self.params));
+        self.specialized = kernels.specialized(index, &constants).map(|p| (constants, p));
     }
 
     fn rebind(&mut self) {
@@ -246,6 +290,7 @@ impl GpuRenderer {
         };
         self.trace_shape = (w, h);
         self.accumulate_small = None;
+        self.specialized = None;
     }
 
     /// The trace kernel a renderer on `ctx` starts with: the small-scene
@@ -255,9 +300,18 @@ impl GpuRenderer {
     /// GPUs), whose compilers may keep the unrolled scene in registers
     /// less well, until a run there says otherwise (`pathtracer bench
     /// throughput` times both; docs/ARCHITECTURE.md has the figures).
+    ///
+    /// On native software adapters (lavapipe) the small-scene pipeline is
+    /// specialized to the scene: the driver folds the scene's values into
+    /// the code, at the price of a pipeline made per scene and strategy
+    /// (a viewer that edits the scene live chooses the unspecialized one).
+    /// A browser keeps one pipeline: it compiles each through a second
+    /// shading language.
     pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
         const NVIDIA: u32 = 0x10de;
-        if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
+        if ctx.is_software() && !cfg!(target_arch = "wasm32") {
+            TraceKernel::Specialized
+        } else if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
             TraceKernel::SmallScene
         } else {
             TraceKernel::General
@@ -268,26 +322,38 @@ impl GpuRenderer {
     /// renderer starts with [`GpuRenderer::default_trace_kernel`]). The small-scene kernel
     /// comes in the default 8x8 shape only.
     pub fn set_trace_kernel(&mut self, ctx: &GpuContext, kernel: TraceKernel) {
-        if kernel == TraceKernel::SmallScene {
+        if kernel == TraceKernel::General {
+            self.accumulate_small = None;
+        } else {
             self.set_workgroup_shape(ctx, 0);
             self.accumulate_small = Some(Arc::clone(ctx.small_kernels()));
-        } else {
-            self.accumulate_small = None;
         }
+        self.specialize = kernel == TraceKernel::Specialized;
+        self.specialize_pipeline();
     }
 
     /// The small-scene pipeline the next frame runs, if any: where the
     /// small-scene kernel is chosen, the smallest capacity that holds the
-    /// scene.
+    /// scene, specialized to it where that is chosen and could be made.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
+        if let Some((_, pipeline)) = &self.specialized {
+            return Some(pipeline);
+        }
         let index = small_scene_index(self.small_fit?, SmallVariant::of(&self.params));
         self.accumulate_small.as_ref()?.get(index)
     }
 
     /// The kernel the next frame runs: the small-scene kernel where it is
-    /// chosen and the scene fits it, else the general one.
+    /// chosen and the scene fits it (specialized where that is chosen and
+    /// was made), else the general one.
     pub fn trace_kernel(&self) -> TraceKernel {
-        if self.small_pipeline().is_some() { TraceKernel::SmallScene } else { TraceKernel::General }
+        if self.specialized.is_some() {
+            TraceKernel::Specialized
+        } else if self.small_pipeline().is_some() {
+            TraceKernel::SmallScene
+        } else {
+            TraceKernel::General
+        }
     }
 
     /// Submits one frame of `samples` samples per pixel. Nothing waits: the
