@@ -43,8 +43,9 @@ pub enum TraceKernel {
     /// compiled into the pipeline as specialization constants, so that
     /// the driver folds them into the code: a pipeline per scene and
     /// strategy, made when the renderer first needs it (half a second and
-    /// more on lavapipe). For renders of a fixed scene on software
-    /// adapters; scenes that fit no capacity use `General`.
+    /// more on lavapipe). For renders of a fixed scene, when a caller
+    /// chooses it (`pathtracer bench throughput` times it); no adapter's
+    /// default. Scenes that fit no capacity use `General`.
     Specialized,
 }
 

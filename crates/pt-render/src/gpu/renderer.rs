@@ -301,17 +301,14 @@ impl GpuRenderer {
     /// less well, until a run there says otherwise (`pathtracer bench
     /// throughput` times both; docs/ARCHITECTURE.md has the figures).
     ///
-    /// On native software adapters (lavapipe) the small-scene pipeline is
-    /// specialized to the scene: the driver folds the scene's values into
-    /// the code, at the price of a pipeline made per scene and strategy
-    /// (a viewer that edits the scene live chooses the unspecialized one).
-    /// A browser keeps one pipeline: it compiles each through a second
-    /// shading language.
+    /// No adapter starts on `TraceKernel::Specialized`: on lavapipe it
+    /// traces about 7% more samples per second, but with the flags
+    /// compiled in, a strategy without projected NEE loses that code and
+    /// then beat the default by 10% to 14% around the small lights
+    /// (docs/ARCHITECTURE.md).
     pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
         const NVIDIA: u32 = 0x10de;
-        if ctx.is_software() && !cfg!(target_arch = "wasm32") {
-            TraceKernel::Specialized
-        } else if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
+        if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
             TraceKernel::SmallScene
         } else {
             TraceKernel::General
