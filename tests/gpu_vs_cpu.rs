@@ -185,6 +185,14 @@ fn set_geometry_renders_the_new_scene() {
     assert_ne!(means(&got), means(&render_gpu(&ctx, &before, &settings, 8, 7)));
 }
 
+/// The default scene with a third sphere: the larger small-scene capacity.
+fn three_spheres() -> Scene {
+    let mut scene = Scene::default_scene();
+    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
+    scene.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    scene
+}
+
 /// A frame of `scene` with the trace kernel `kernel`.
 fn render_with(ctx: &pt_render::GpuContext, scene: &Scene, kernel: TraceKernel) -> (TraceKernel, Vec<[f32; 3]>) {
     render_with_flags(ctx, scene, kernel, scene.default_flags())
@@ -222,9 +230,7 @@ fn render_with_flags(
 fn small_scene_kernels_render_what_the_general_kernel_renders() {
     use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
     let ctx = gpu();
-    let mut three_spheres = Scene::default_scene();
-    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
-    three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    let three_spheres = three_spheres();
     let samplers = [FLAGS_DEFAULT & !FLAG_SOBOL, FLAGS_DEFAULT, FLAGS_DEFAULT | FLAG_SOBOL_DEEP];
     let connected = |flags: u32| (flags & !FLAG_GLOW) | FLAG_CONNECT;
     let all = samplers.into_iter().flat_map(|f| [f, connected(f), f & !FLAG_GLOW]);
@@ -283,9 +289,7 @@ fn close_per_mille(a: &[[f32; 3]], b: &[[f32; 3]], tolerance: f32) -> usize {
 fn specialized_kernels_render_what_the_small_scene_kernels_render() {
     use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAGS_DEFAULT};
     let ctx = gpu();
-    let mut three_spheres = Scene::default_scene();
-    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
-    three_spheres.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    let three_spheres = three_spheres();
     let connected = (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_CONNECT;
     for scene in [Scene::default_scene(), three_spheres] {
         let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
