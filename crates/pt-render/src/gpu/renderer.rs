@@ -42,10 +42,10 @@ pub struct GpuRenderer {
     /// Whether the small-scene pipeline is specialized to the scene
     /// (`TraceKernel::Specialized`).
     specialize: bool,
-    /// That pipeline and the constants it was made with, while they are
-    /// the current scene's: made again when the scene, the settings or
-    /// the strategy change.
-    specialized: Option<(Vec<u32>, wgpu::ComputePipeline)>,
+    /// That pipeline, for the current scene, settings and strategy
+    /// (`SmallKernels::specialized` keeps it with its constants and makes
+    /// another when they change).
+    specialized: Option<wgpu::ComputePipeline>,
     /// Index of the next frame: distinct per dispatch, part of the RNG seed.
     next_frame: u32,
     /// Samples per pixel accumulated since the last reset (Sobol index).
@@ -211,9 +211,8 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Makes the specialized small-scene pipeline for the current scene,
-    /// settings and strategy, where one is chosen and the scene fits, unless
-    /// the one in hand has the same constants.
+    /// The specialized small-scene pipeline for the current scene, settings
+    /// and strategy, where one is chosen and the scene fits.
     fn specialize_pipeline(&mut self) {
         let (Some(size), Some(kernels), true) = (self.small_fit, &self.accumulate_small, self.specialize) else {
             self.specialized = None;
@@ -222,13 +221,10 @@ impl GpuRenderer {
         let constants = match SMALL_SCENE_SIZES[size] {
             (5, 2) => scene_constants::<5, 2>(&self.params, &self.geometry),
             (8, 4) => scene_constants::<8, 4>(&self.params, &self.geometry),
-            _ => unreachable!("one arm per capacity of SMALL_SCENE_SIZES (a unit test checks them)"),
+            _ => unreachable!("one arm per capacity of SMALL_SCENE_SIZES (a GPU test specializes each)"),
         };
-        if self.specialized.as_ref().is_some_and(|(c, _)| *c == constants) {
-            return;
-        }
         let index = small_scene_index(size, SmallVariant::of(&self.params));
-        self.specialized = kernels.specialized(index, &constants).map(|p| (constants, p));
+        self.specialized = kernels.specialized(index, &constants);
     }
 
     fn rebind(&mut self) {
@@ -333,7 +329,7 @@ impl GpuRenderer {
     /// small-scene kernel is chosen, the smallest capacity that holds the
     /// scene, specialized to it where that is chosen and could be made.
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
-        if let Some((_, pipeline)) = &self.specialized {
+        if let Some(pipeline) = &self.specialized {
             return Some(pipeline);
         }
         let index = small_scene_index(self.small_fit?, SmallVariant::of(&self.params));
