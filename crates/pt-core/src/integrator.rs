@@ -453,8 +453,8 @@ pub fn render_pixel_small<
     params: &FrameParams,
     geometry: &Geometry,
 ) -> PixelSamples {
-    let scene = SmallScene::<W, S>::new(params, geometry);
-    pixel_samples::<Smp, _, _, CONNECT, GLOW, ROULETTE>(x, y, params, geometry, &scene, &mut NoRayCount)
+    // Unset constants: the scene from the buffers.
+    render_pixel_specialized::<Smp, W, S, CONNECT, GLOW, ROULETTE, 1>(x, y, params, geometry, &[0])
 }
 
 /// [`render_pixel_small`] with the scene's values taken from `constants`

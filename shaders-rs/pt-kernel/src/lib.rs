@@ -88,7 +88,9 @@ macro_rules! accumulate_entry {
     ($name:ident, $x:literal, $y:literal) => {
         accumulate_entry!($name, $x, $y, integrator::render_pixel);
     };
-    ($name:ident, $x:literal, $y:literal, $render:expr) => {
+    // With `constants: TYPE` after the render function, the entry point
+    // also takes specialization constants 0, 1, ... as `constants`.
+    ($name:ident, $x:literal, $y:literal, $render:expr $(, $constants:ident: $ty:ty)?) => {
         /// [`accumulate_pixel`] in workgroups of this shape.
         #[spirv(compute(threads($x, $y)))]
         pub fn $name(
@@ -97,6 +99,7 @@ macro_rules! accumulate_entry {
             #[spirv(uniform, descriptor_set = 0, binding = 1)] geometry: &Geometry,
             #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
+            $(#[spirv(spec_constant(id = 0, default = 0))] $constants: $ty,)?
         ) {
             accumulate_pixel(id, params, geometry, accum, non_finite, $render);
         }
@@ -118,20 +121,15 @@ macro_rules! small_entries {
 /// specialization constants 0, 1, ... (`constant_words` of them).
 macro_rules! small_entry {
     ($name:ident, $smp:ty, $w:literal, $s:literal, $connect:literal, $glow:literal, $roulette:literal) => {
-        /// [`accumulate_pixel`] with [`small`] for this capacity and code.
-        #[spirv(compute(threads(8, 8)))]
-        pub fn $name(
-            #[spirv(global_invocation_id)] id: UVec3,
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] params: &FrameParams,
-            #[spirv(uniform, descriptor_set = 0, binding = 1)] geometry: &Geometry,
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] accum: &mut [AccumPixel],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] non_finite: &mut [u32],
-            #[spirv(spec_constant(id = 0, default = 0))] constants: [u32; constant_words($w, $s)],
-        ) {
-            accumulate_pixel(id, params, geometry, accum, non_finite, |x, y, p, g| {
+        accumulate_entry!(
+            $name,
+            8,
+            8,
+            |x, y, p, g| {
                 small::<$smp, $w, $s, $connect, $glow, $roulette, { constant_words($w, $s) }>(x, y, p, g, &constants)
-            });
-        }
+            },
+            constants: [u32; constant_words($w, $s)]
+        );
     };
 }
 
