@@ -569,8 +569,8 @@ fn pixel_samples<
         if path.step::<V, C, CONNECT, GLOW, ROULETTE>(params, scene, &shadow_walls, rays, (x, y, pixel, s + 1), &mut l)
         {
             if is_finite(l) {
-                // width != 0 always; the compiler cannot know it (see kahan_add).
-                kahan_add(&mut out.sum, &mut compensation, l, params.width != 0);
+                // Always true; the compiler cannot know it (see kahan_add).
+                kahan_add(&mut out.sum, &mut compensation, l, params.keeps_sums());
                 out.valid += 1;
             } else {
                 out.non_finite += 1;

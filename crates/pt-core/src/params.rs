@@ -133,3 +133,16 @@ pub struct FrameParams {
     /// The part of the image this renderer accumulates.
     pub tile: Tile,
 }
+
+impl FrameParams {
+    /// Always true, from a value no shader compiler can know: the `keep`
+    /// of `accum::kahan_add`. The frame index is read from the parameter
+    /// buffer on every pipeline (a pipeline with the scene compiled in
+    /// knows the image size, the flags and the rest as constants, and a
+    /// test on those folds away and with it the compensation), and the
+    /// renderers never write `u32::MAX` there.
+    #[inline]
+    pub fn keeps_sums(&self) -> bool {
+        self.frame != u32::MAX
+    }
+}

@@ -75,7 +75,8 @@ impl CpuRenderer {
                 px.add(integrator::render_pixel(tile.x + x as u32, y, &params, geometry), true);
             }
         });
-        self.next_frame += 1;
+        // Never u32::MAX (`FrameParams::keeps_sums`).
+        self.next_frame = (self.next_frame + 1) % u32::MAX;
     }
 
     /// Continues a render that stopped after `frames` frames and `samples`

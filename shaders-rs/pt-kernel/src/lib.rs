@@ -39,8 +39,8 @@ fn accumulate_pixel(
         return;
     }
     let samples = render(tile.x + id.x, tile.y + id.y, params, geometry);
-    // width != 0 always; the driver cannot know it (see `kahan_add`).
-    accum[(id.y * tile.width + id.x) as usize].add(samples, params.width != 0);
+    // Always true; the driver cannot know it (see `kahan_add`).
+    accum[(id.y * tile.width + id.x) as usize].add(samples, params.keeps_sums());
     // Rare: the atomic costs nothing on clean frames.
     if samples.non_finite > 0 {
         // SAFETY: a relaxed add on a u32 in a storage buffer, at queue-family

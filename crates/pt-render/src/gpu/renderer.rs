@@ -369,7 +369,8 @@ impl GpuRenderer {
             t.resolve(&mut encoder);
         }
         self.queue.submit([encoder.finish()]);
-        self.next_frame += 1;
+        // Never u32::MAX (`FrameParams::keeps_sums`).
+        self.next_frame = (self.next_frame + 1) % u32::MAX;
     }
 
     /// Writes the parameters (display settings included) without a frame.
