@@ -7,10 +7,13 @@
 #   scripts/performance_report.sh suite    the scene suite only
 #   scripts/performance_report.sh holdout  the held-out scenes only
 #   scripts/performance_report.sh probe    the probe scenes only
+#
+# SEEDS (default 5) sets the seeds of every measurement, ours and Mitsuba's.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p pathtracer
 bin=target/release/pathtracer
+seeds=${SEEDS:-5}
 out=docs/bench
 mkdir -p "$out"
 
@@ -31,8 +34,8 @@ if [ "${1:-all}" = holdout ] || [ "${1:-all}" = probe ]; then
     which=$1
     hold=(--suite --suite-dir "scenes/$which" --width 128 --height 128 --reference-spp 8192 --out-dir "$out/$which")
     "$bin" bench convergence "${hold[@]}" --reference-only
-    python3 scripts/mitsuba/compare.py --suite "$out/$which/suite.tsv" "$out/$which/mitsuba" --seeds 5
-    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md"
+    python3 scripts/mitsuba/compare.py --suite "$out/$which/suite.tsv" "$out/$which/mitsuba" --seeds "$seeds"
+    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md"
     agreement "$out/$which/suite.tsv" "$out/$which/mitsuba"
     exit 0
 fi
@@ -41,15 +44,15 @@ if [ "${1:-all}" != suite ]; then
     # 1. The reference (our CPU renderer, 100x the largest budget).
     "$bin" bench convergence --reference-only --out-dir "$out"
     # 2. Mitsuba's error against time against that reference (its fastest sampler).
-    python3 scripts/mitsuba/compare.py scenes/default.toml "$out/reference.exr" "$out/mitsuba.csv" --seeds 5
+    python3 scripts/mitsuba/compare.py scenes/default.toml "$out/reference.exr" "$out/mitsuba.csv" --seeds "$seeds"
     # 3. Throughput and convergence side by side, and the report.
-    "$bin" bench all --seeds 5 --reference "$out/reference.exr" --mitsuba-csv "$out/mitsuba.csv" --out-dir "$out" --report docs/PERFORMANCE.md
+    "$bin" bench all --seeds "$seeds" --reference "$out/reference.exr" --mitsuba-csv "$out/mitsuba.csv" --out-dir "$out" --report docs/PERFORMANCE.md
 fi
 
 # The scene suite (scenes/): references rendered once and cached by scene
 # hash under docs/bench/references, Mitsuba's four samplers, then ours.
 suite=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out")
 "$bin" bench convergence "${suite[@]}" --reference-only
-python3 scripts/mitsuba/compare.py --suite "$out/suite.tsv" "$out/mitsuba-suite" --seeds 5
-"$bin" bench convergence "${suite[@]}" --max-spp 16384 --seeds 5 --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md
+python3 scripts/mitsuba/compare.py --suite "$out/suite.tsv" "$out/mitsuba-suite" --seeds "$seeds"
+"$bin" bench convergence "${suite[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md
 agreement "$out/suite.tsv" "$out/mitsuba-suite"

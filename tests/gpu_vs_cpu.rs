@@ -259,8 +259,8 @@ fn small_scene_kernels_render_what_the_general_kernel_renders() {
 }
 
 /// A renderer starts on its adapter's default kernel: on a software
-/// adapter (lavapipe, where CI runs this), the small-scene kernel for a
-/// scene it holds.
+/// adapter (lavapipe, where CI runs this), the small-scene kernel with
+/// the scene compiled in, for a scene it holds.
 #[test]
 fn renderers_start_on_their_adapters_default_kernel() {
     let ctx = gpu();
@@ -268,7 +268,7 @@ fn renderers_start_on_their_adapters_default_kernel() {
     let params = scene.frame_params(&RenderSettings { width: 16, height: 16, ..scene.render }, 4, 1);
     let r = GpuRenderer::new(&ctx, params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
     if ctx.is_software() {
-        assert_eq!(r.trace_kernel(), TraceKernel::SmallScene);
+        assert_eq!(r.trace_kernel(), TraceKernel::Specialized);
     }
     assert_eq!(r.trace_kernel(), GpuRenderer::default_trace_kernel(&ctx));
 }

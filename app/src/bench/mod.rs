@@ -104,9 +104,10 @@ pub enum StrategyId {
     /// Sobol points for every draw switched: for the first 5 draws only
     /// where the default has them for every draw, else for every draw.
     SobolSwitched,
-    /// NEE uniform in the light's cone everywhere, never by projected
-    /// solid angle.
-    NeeUniform,
+    /// NEE's sampling switched: by projected solid angle where the light's
+    /// cone lies above the horizon where the default samples the cone
+    /// uniformly (every scene's default does), else uniform.
+    NeeSwitched,
     /// Connections through lit wall points switched: off (the glow lobe at
     /// the light's share instead) where the default has them, on (in the
     /// lobe's place) where it has not.
@@ -178,7 +179,7 @@ const _: () = assert!(
 pub const STRATEGIES: [Strategy; 14] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: NEE by projected solid angle (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
+        name: "default: NEE uniform in the light's cone (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -257,9 +258,9 @@ pub const STRATEGIES: [Strategy; 14] = [
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
     Strategy {
-        id: StrategyId::NeeUniform,
-        name: "NEE uniform in the light's cone (no projected solid angle)",
-        flags: |f| f & !FLAG_NEE_PROJECTED,
+        id: StrategyId::NeeSwitched,
+        name: "NEE by projected solid angle (where the default samples uniformly in the light's cone; else uniform)",
+        flags: |f| f ^ FLAG_NEE_PROJECTED,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -335,7 +336,7 @@ mod tests {
         // default has them, and them in the lobe's place (with Sobol for
         // every draw) where it has not.
         let connections = |scene: &pt_render::Scene| StrategyId::ConnectionsSwitched.strategy().flags_for(scene);
-        assert_eq!(connections(&small), pt_core::params::FLAGS_DEFAULT);
+        assert_eq!(connections(&small), pt_render::strategy::BASE_FLAGS);
         assert_eq!(connections(&large), with_connections(large.default_flags()) | FLAG_SOBOL_DEEP);
         assert_eq!(connections(&open), open.default_flags() | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // Switching the Sobol draws: the first 5 only beside connections,
@@ -343,6 +344,13 @@ mod tests {
         let sobol = |scene: &pt_render::Scene| StrategyId::SobolSwitched.strategy().flags_for(scene);
         assert_eq!(sobol(&small) & FLAG_SOBOL_DEEP, 0);
         assert_ne!(sobol(&large) & FLAG_SOBOL_DEEP, 0);
+        // Every default samples NEE uniformly in the light's cone; the
+        // switched strategy projects it and changes nothing else.
+        for scene in [&small, &large, &open] {
+            let switched = StrategyId::NeeSwitched.strategy().flags_for(scene);
+            assert_eq!(scene.default_flags() & FLAG_NEE_PROJECTED, 0);
+            assert_eq!(switched, scene.default_flags() | FLAG_NEE_PROJECTED);
+        }
     }
 
     #[test]

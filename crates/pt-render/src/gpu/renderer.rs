@@ -289,23 +289,24 @@ impl GpuRenderer {
         self.specialized = None;
     }
 
-    /// The trace kernel a renderer on `ctx` starts with: the small-scene
-    /// kernel (for the scenes it holds) on the adapters where it was
-    /// measured ahead, software ones (lavapipe, SwiftShader in a browser)
-    /// and NVIDIA's; the general kernel on the others (AMD, Intel, Apple
-    /// GPUs), whose compilers may keep the unrolled scene in registers
-    /// less well, until a run there says otherwise (`pathtracer bench
-    /// throughput` times both; docs/ARCHITECTURE.md has the figures).
-    ///
-    /// No adapter starts on `TraceKernel::Specialized`: on lavapipe it
-    /// traces about 7% more samples per second, but with the flags
-    /// compiled in, a strategy without projected NEE loses that code and
-    /// then beat the default by 10% to 14% around the small lights
-    /// (docs/ARCHITECTURE.md).
+    /// The trace kernel a renderer on `ctx` starts with: on software
+    /// adapters (lavapipe, SwiftShader) and NVIDIA's, the small-scene
+    /// kernel with the scene compiled in (for the scenes it holds), which
+    /// drops the code of every feature the scene's flags leave off and
+    /// folds the scene's values into the instructions: about 7% more
+    /// samples per second than the same kernel reading the scene from
+    /// buffers on lavapipe, 1.3x on an NVIDIA H200. The general kernel on
+    /// the others (AMD, Intel, Apple GPUs), whose compilers may keep the
+    /// unrolled scene in registers less well, until a run there says
+    /// otherwise (`pathtracer bench throughput` times every form;
+    /// docs/ARCHITECTURE.md has the figures). A renderer whose scene
+    /// changes as a user edits it (the viewer) asks for
+    /// [`TraceKernel::unspecialized`] of this, so that no edit waits for a
+    /// pipeline.
     pub fn default_trace_kernel(ctx: &GpuContext) -> TraceKernel {
         const NVIDIA: u32 = 0x10de;
         if ctx.is_software() || ctx.adapter_info.vendor == NVIDIA {
-            TraceKernel::SmallScene
+            TraceKernel::Specialized
         } else {
             TraceKernel::General
         }
