@@ -75,14 +75,13 @@ impl CpuRenderer {
                 px.add(integrator::render_pixel(tile.x + x as u32, y, &params, geometry), true);
             }
         });
-        // Never u32::MAX (`FrameParams::keeps_sums`).
-        self.next_frame = (self.next_frame + 1) % u32::MAX;
+        self.next_frame = crate::renderer::frame_index(self.next_frame.wrapping_add(1));
     }
 
     /// Continues a render that stopped after `frames` frames and `samples`
     /// samples per pixel, as [`crate::GpuRenderer::start_at`].
     pub fn start_at(&mut self, frames: u32, samples: u32) {
-        self.next_frame = frames;
+        self.next_frame = crate::renderer::frame_index(frames);
         self.samples_done = samples;
     }
 

@@ -10,6 +10,14 @@ use crate::cpu::CpuRenderer;
 use crate::gpu::renderer::max_image_bytes;
 use crate::gpu::{GpuContext, GpuError, GpuRenderer};
 
+/// The frame index `frame` wrapped into the indices a renderer may write:
+/// every `u32` but `u32::MAX`, which would turn off the kernel's Kahan
+/// compensation (`FrameParams::keeps_sums`). Both renderers number their
+/// frames through it, so they keep drawing the same samples.
+pub(crate) fn frame_index(frame: u32) -> u32 {
+    frame % u32::MAX
+}
+
 /// Where paths are traced: the rust-gpu kernel on a GPU context (shared by
 /// every renderer made on it: the kernel is compiled once per context), or
 /// the same code on the CPU. Every command, the viewer's tests, the
@@ -265,4 +273,19 @@ pub fn render_tiled(
         out.stats.non_finite += stats.non_finite;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_index;
+
+    #[test]
+    fn frame_indices_never_reach_u32_max() {
+        assert_eq!(frame_index(7), 7);
+        assert_eq!(frame_index(u32::MAX - 1), u32::MAX - 1);
+        // The frame after the last allowed index, and a restored count of
+        // u32::MAX, start again at 0.
+        assert_eq!(frame_index((u32::MAX - 1).wrapping_add(1)), 0);
+        assert_eq!(frame_index(u32::MAX.wrapping_add(1)), 0);
+    }
 }

@@ -34,18 +34,19 @@ pub enum TraceKernel {
     /// `accumulate_small_*`: a copy of a small scene read at constant
     /// indices (`pt_core::small_scene`), in the smallest capacity that holds
     /// the scene, with the sampler the flags pick compiled in; frames of
-    /// scenes that fit none use `General`. The default
-    /// on CPU adapters (lavapipe), where it measured faster
-    /// (docs/ARCHITECTURE.md).
+    /// scenes that fit none use `General`. What a renderer whose scene
+    /// changes as it is edited (the viewer) runs where `Specialized` is
+    /// the default (`TraceKernel::unspecialized`).
     SmallScene,
     /// The small-scene kernel with the scene's values (camera, light,
     /// settings, walls and spheres: `small_scene::scene_constants`)
     /// compiled into the pipeline as specialization constants, so that
     /// the driver folds them into the code: a pipeline per scene and
     /// strategy, made when the renderer first needs it (half a second and
-    /// more on lavapipe). For renders of a fixed scene, when a caller
-    /// chooses it (`pathtracer bench throughput` times it); no adapter's
-    /// default. Scenes that fit no capacity use `General`.
+    /// more on lavapipe). The default for renders of a fixed scene on
+    /// software adapters and NVIDIA GPUs
+    /// (`GpuRenderer::default_trace_kernel`). Scenes that fit no capacity
+    /// use `General`.
     Specialized,
 }
 

@@ -259,7 +259,7 @@ impl GpuRenderer {
     /// samples per pixel: the next frame gets that frame index and Sobol
     /// offset, as it would have in one render (a part of a split render).
     pub fn start_at(&mut self, frames: u32, samples: u32) {
-        self.next_frame = frames;
+        self.next_frame = crate::renderer::frame_index(frames);
         self.samples_done = samples;
     }
 
@@ -370,8 +370,7 @@ impl GpuRenderer {
             t.resolve(&mut encoder);
         }
         self.queue.submit([encoder.finish()]);
-        // Never u32::MAX (`FrameParams::keeps_sums`).
-        self.next_frame = (self.next_frame + 1) % u32::MAX;
+        self.next_frame = crate::renderer::frame_index(self.next_frame.wrapping_add(1));
     }
 
     /// Writes the parameters (display settings included) without a frame.
