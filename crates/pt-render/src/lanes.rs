@@ -38,7 +38,7 @@ use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
 use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
-use pt_core::sampler::SOBOL_DRAWS;
+use pt_core::sampler::{SOBOL_DRAWS, joint_draws};
 use pt_core::sampling::{PI, sin_cos_taylor};
 use pt_core::wall::EDGE_SLACK;
 
@@ -194,6 +194,11 @@ impl U {
     #[inline(always)]
     fn add(self, o: Self) -> Self {
         Self(unsafe { _mm256_add_epi32(self.0, o.0) })
+    }
+    /// Wrapping subtraction.
+    #[inline(always)]
+    fn wsub(self, o: Self) -> Self {
+        Self(unsafe { _mm256_sub_epi32(self.0, o.0) })
     }
     #[inline(always)]
     fn wmul(self, o: Self) -> Self {
@@ -472,9 +477,12 @@ fn pcg4d(v: [U; 4]) -> [U; 4] {
 /// when `PCG` is false, `Rng` (every draw from the PCG stream) when true.
 #[derive(Copy, Clone)]
 struct Sampler<const DRAWS: u32, const PCG: bool> {
+    index: U,
     index_reversed: U,
     seed: U,
     pair: U,
+    /// `joint_draws` of the frame's flags, on every lane.
+    joint: U,
     tail: U,
 }
 
@@ -495,12 +503,13 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
             let h = pcg4d([x, y, U::splat(params.frame), s.xor(pixel)]);
             let tail = h[0].xor(h[1].rotate_left::<16, 16>()).xor(h[2]).xor(h[3].rotate_left::<8, 24>());
             let zero = U::splat(0);
-            Self { index_reversed: zero, seed: zero, pair: zero, tail }
+            Self { index: zero, index_reversed: zero, seed: zero, pair: zero, joint: zero, tail }
         } else {
             let index = s.add(U::splat(params.sample_offset));
             let tail =
                 if DRAWS == u32::MAX { U::splat(0) } else { pcg_hash(pixel.xor(index.wmul(U::splat(0x9e37_79b9)))) };
-            Self { index_reversed: index.reverse_bits(), seed: pixel, pair: U::splat(0), tail }
+            let joint = U::splat(joint_draws(params.flags));
+            Self { index, index_reversed: index.reverse_bits(), seed: pixel, pair: U::splat(0), joint, tail }
         }
     }
 
@@ -523,6 +532,20 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         laine_karras(self.index_reversed, seed).reverse_bits()
     }
 
+    /// `SobolSampler::point_index` on every lane, with
+    /// `pt_core::sampler::joint_index` written out for the lanes.
+    #[inline(always)]
+    fn point_index(&self, seed: U) -> U {
+        let (g, i) = (self.pair.wsub(self.joint), self.index);
+        let t1 = i.xor(i.shr::<2>()).xor(i.shr::<6>()).xor(i.shr::<7>());
+        let t2 = i.xor(i.shr::<1>()).xor(i.shr::<4>()).xor(i.shr::<7>());
+        let t3 = i.xor(i.shr::<1>()).xor(i.shr::<5>()).xor(i.shr::<8>());
+        let t4 = i.xor(i.shr::<3>()).xor(i.shr::<7>());
+        let at = |n: u32| g.eq(U::splat(n));
+        let joint = selu(at(0), i, selu(at(1), t1, selu(at(2), t2, selu(at(3), t3, t4))));
+        selu(g.lt(self.joint), joint, self.shuffled_index(seed))
+    }
+
     /// `next_1d` on the lanes in `m`; the others draw nothing.
     #[inline(always)]
     fn next_1d(&mut self, m: M) -> F {
@@ -531,7 +554,7 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         let mut out = F::splat(0.0);
         if ms.any() {
             let seed = self.next_seed(ms);
-            let i = self.shuffled_index(seed);
+            let i = self.point_index(seed);
             let v = laine_karras(i, seed.xor(U::splat(0xa511_e9b3))).reverse_bits();
             out = sel(ms, to_unit(v), out);
         }
@@ -549,7 +572,7 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         let (mut a, mut b) = (F::splat(0.0), F::splat(0.0));
         if ms.any() {
             let seed = self.next_seed(ms);
-            let i = self.shuffled_index(seed);
+            let i = self.point_index(seed);
             let x = laine_karras(i, seed.xor(U::splat(0xa511_e9b3))).reverse_bits();
             let y_seed = seed.wmul(U::splat(0x2c1b_3c6d)).xor(U::splat(0x297a_2d39));
             let y = laine_karras(sobol_dim1_reversed(i), y_seed).reverse_bits();
@@ -570,7 +593,9 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         Self {
             index_reversed: selu(m, a.index_reversed, b.index_reversed),
             seed: selu(m, a.seed, b.seed),
+            index: selu(m, a.index, b.index),
             pair: selu(m, a.pair, b.pair),
+            joint: selu(m, a.joint, b.joint),
             tail: selu(m, a.tail, b.tail),
         }
     }
