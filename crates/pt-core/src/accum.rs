@@ -36,8 +36,9 @@ pub struct AccumPixel {
 /// Adds `x` to the compensated sum (`sum`, `compensation`): Kahan's
 /// summation.
 ///
-/// `keep` must be true, from a value the shader compiler cannot know (a
-/// uniform). SPIR-V arithmetic without the NoContraction decoration may be
+/// `keep` must be true, from a value the shader compiler cannot know (one
+/// read from the parameter buffer that no pipeline compiles in, as
+/// `FrameParams::keeps_sums`). SPIR-V arithmetic without the NoContraction decoration may be
 /// reassociated by the driver (Mesa's NIR does, in lavapipe), which folds
 /// `(t - sum) - y` to zero and silently turns Kahan's sum into a plain one.
 /// Passing `t` through a select on `keep` hides that `t == sum + y` (the

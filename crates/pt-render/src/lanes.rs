@@ -481,8 +481,8 @@ struct Sampler<const DRAWS: u32, const PCG: bool> {
     index_reversed: U,
     seed: U,
     pair: U,
-    /// `joint_draws` of the frame's flags, on every lane.
-    joint: U,
+    /// `joint_draws` of the frame's flags: the same on every lane.
+    joint: u32,
     tail: U,
 }
 
@@ -503,12 +503,12 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
             let h = pcg4d([x, y, U::splat(params.frame), s.xor(pixel)]);
             let tail = h[0].xor(h[1].rotate_left::<16, 16>()).xor(h[2]).xor(h[3].rotate_left::<8, 24>());
             let zero = U::splat(0);
-            Self { index: zero, index_reversed: zero, seed: zero, pair: zero, joint: zero, tail }
+            Self { index: zero, index_reversed: zero, seed: zero, pair: zero, joint: 0, tail }
         } else {
             let index = s.add(U::splat(params.sample_offset));
             let tail =
                 if DRAWS == u32::MAX { U::splat(0) } else { pcg_hash(pixel.xor(index.wmul(U::splat(0x9e37_79b9)))) };
-            let joint = U::splat(joint_draws(params.flags));
+            let joint = joint_draws(params.flags);
             Self { index, index_reversed: index.reverse_bits(), seed: pixel, pair: U::splat(0), joint, tail }
         }
     }
@@ -536,14 +536,15 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
     /// `pt_core::sampler::joint_index` written out for the lanes.
     #[inline(always)]
     fn point_index(&self, seed: U) -> U {
-        let (g, i) = (self.pair.wsub(self.joint), self.index);
+        let (joint, i) = (U::splat(self.joint), self.index);
+        let g = self.pair.wsub(joint);
         let t1 = i.xor(i.shr::<2>()).xor(i.shr::<6>()).xor(i.shr::<7>());
         let t2 = i.xor(i.shr::<1>()).xor(i.shr::<4>()).xor(i.shr::<7>());
         let t3 = i.xor(i.shr::<1>()).xor(i.shr::<5>()).xor(i.shr::<8>());
         let t4 = i.xor(i.shr::<3>()).xor(i.shr::<7>());
         let at = |n: u32| g.eq(U::splat(n));
-        let joint = selu(at(0), i, selu(at(1), t1, selu(at(2), t2, selu(at(3), t3, t4))));
-        selu(g.lt(self.joint), joint, self.shuffled_index(seed))
+        let transformed = selu(at(0), i, selu(at(1), t1, selu(at(2), t2, selu(at(3), t3, t4))));
+        selu(g.lt(joint), transformed, self.shuffled_index(seed))
     }
 
     /// `next_1d` on the lanes in `m`; the others draw nothing.
@@ -595,7 +596,7 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
             seed: selu(m, a.seed, b.seed),
             index: selu(m, a.index, b.index),
             pair: selu(m, a.pair, b.pair),
-            joint: selu(m, a.joint, b.joint),
+            joint: a.joint,
             tail: selu(m, a.tail, b.tail),
         }
     }
