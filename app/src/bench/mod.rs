@@ -20,8 +20,8 @@ pub use report::*;
 pub use throughput::*;
 
 use pt_core::params::{
-    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
-    FLAG_SOBOL_DEEP,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
+    FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
 use pt_render::strategy::with_connections;
@@ -108,6 +108,10 @@ pub enum StrategyId {
     /// cone lies above the horizon where the default samples the cone
     /// uniformly (every scene's default does), else uniform.
     NeeSwitched,
+    /// NEE's control variate switched: off (the shadow ray's estimate
+    /// alone) where the default has it (every scene's default does), else
+    /// on.
+    ControlSwitched,
     /// Connections through lit wall points switched: off (the glow lobe at
     /// the light's share instead) where the default has them, on (in the
     /// lobe's place) where it has not.
@@ -176,10 +180,10 @@ const _: () = assert!(
 /// The strategies compared; the first is the default configuration (the
 /// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
 /// each other changes one thing from it on the same scene.
-pub const STRATEGIES: [Strategy; 14] = [
+pub const STRATEGIES: [Strategy; 15] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: NEE uniform in the light's cone (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
+        name: "default: NEE uniform in the light's cone with a control variate (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -261,6 +265,13 @@ pub const STRATEGIES: [Strategy; 14] = [
         id: StrategyId::NeeSwitched,
         name: "NEE by projected solid angle (where the default samples uniformly in the light's cone; else uniform)",
         flags: |f| f ^ FLAG_NEE_PROJECTED,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::ControlSwitched,
+        name: "NEE's control variate switched (off where the default has it; else on)",
+        flags: |f| f ^ FLAG_NEE_CONTROL,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -350,6 +361,11 @@ mod tests {
             let switched = StrategyId::NeeSwitched.strategy().flags_for(scene);
             assert_eq!(scene.default_flags() & FLAG_NEE_PROJECTED, 0);
             assert_eq!(switched, scene.default_flags() | FLAG_NEE_PROJECTED);
+            // Every default has the control variate; the switched strategy
+            // drops it and changes nothing else.
+            let control = StrategyId::ControlSwitched.strategy().flags_for(scene);
+            assert_ne!(scene.default_flags() & FLAG_NEE_CONTROL, 0);
+            assert_eq!(control, scene.default_flags() & !FLAG_NEE_CONTROL);
         }
     }
 

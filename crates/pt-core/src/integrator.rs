@@ -13,7 +13,8 @@ use crate::geometry::Geometry;
 use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
 use crate::params::{
-    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
+    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
+    FLAG_SOBOL_DEEP, FrameParams,
 };
 use crate::query::{Hit, HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
@@ -179,7 +180,7 @@ impl<S: Sampler> Path<S> {
         // goes on from the hit.
         let mut scatter = Scatter::NONE;
         let (mut origin, mut n, mut albedo) = (Vec3::ZERO, Vec3::Z, Vec3::ZERO);
-        let (mut wall_index, mut last, mut projected, mut cone_pdf) = (NO_WALL, false, false, 0.0);
+        let (mut wall_index, mut last, mut projected, mut control, mut cone_pdf) = (NO_WALL, false, false, false, 0.0);
         if !ended {
             let surface = scene.surface(&hit, &ray);
             let p = surface.point;
@@ -223,7 +224,11 @@ impl<S: Sampler> Path<S> {
             scatter = Scatter::new(n, &cone, if last || !GLOW { 0.0 } else { glow_probability(params.flags) });
             // Where the whole cone is above the horizon NEE samples it by
             // projected solid angle and takes all of the light (no MIS).
-            projected = nee && params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(n);
+            let above = nee && cone.above_horizon(n);
+            projected = above && params.flags & FLAG_NEE_PROJECTED != 0;
+            // The control variate (`FLAG_NEE_CONTROL`): the unoccluded
+            // cone's light is known, the shadow ray estimates what is lost.
+            control = above && params.flags & (FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE_CONTROL;
             if nee && !cone.is_empty() {
                 let u = self.sampler.next_2d();
                 let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
@@ -234,15 +239,27 @@ impl<S: Sampler> Path<S> {
                 if cos > 0.0 {
                     rays.ray();
                 }
-                if cos > 0.0 && !blocked {
-                    let value = if projected {
-                        cone.projected_over_pi(n)
-                    } else {
-                        let bsdf = cos * (1.0 / PI);
-                        let weight = if mis && !last { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
-                        // f cos / pdf = (albedo / pi) cos / cone_pdf
-                        bsdf * weight / cone_pdf
-                    };
+                let whole = cone.projected_over_pi(n);
+                let value = if projected {
+                    whole
+                } else {
+                    let bsdf = cos * (1.0 / PI);
+                    let weight =
+                        if mis && !last && !control { power_heuristic(cone_pdf, scatter.pdf(dir)) } else { 1.0 };
+                    // f cos / pdf = (albedo / pi) cos / cone_pdf
+                    bsdf * weight / cone_pdf
+                };
+                // The control variate counts every ray: the unoccluded cone's
+                // exact value, less the uniform sample's estimate where the
+                // ray is blocked (unbiased, exact where nothing blocks the
+                // light). One addition for both: on lavapipe each costs its
+                // code in every pass.
+                let (counts, value) = if control {
+                    (true, if blocked { whole - value } else { whole })
+                } else {
+                    (cos > 0.0 && !blocked, value)
+                };
+                if counts {
                     self.radiance += self.throughput * albedo * light.radiance * (value * self.direct_weight);
                 }
             }
@@ -267,14 +284,15 @@ impl<S: Sampler> Path<S> {
             // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
             // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
             // the surface carries nothing and ends the path. After the last
-            // vertex, and after one whose NEE sampled by projected solid angle, a
-            // BSDF-found light has MIS weight 0: its pdf is kept as 0 for
+            // vertex, and after one whose NEE took all of the light (by
+            // projected solid angle or with the control variate), a BSDF-found
+            // light has MIS weight 0: its pdf is kept as 0 for
             // `power_heuristic`.
             let dir = scatter.sample(u);
             let cos = n.dot(dir);
             let pdf = scatter.pdf(dir);
             let mut dead = !(cos > 0.0 && pdf > 0.0);
-            self.bsdf_pdf = if last || projected { 0.0 } else { pdf };
+            self.bsdf_pdf = if last || projected || control { 0.0 } else { pdf };
             self.scatter_pdf = pdf;
             self.nee_pdf = cone_pdf;
             self.throughput *= albedo * (cos * (1.0 / PI) / pdf);

@@ -16,8 +16,8 @@ use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{
-    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
-    FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
+    FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
 };
 use pt_core::rng::Rng;
 use pt_core::{FrameParams, Sphere, SphereLight, Wall, light};
@@ -412,7 +412,7 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 17] = [
+    let variants: [Variant; 19] = [
         ("connections instead of the glow lobe (the default in a room that does not shadow the light)", |s| {
             s.flags = with_connections(s.flags)
         }),
@@ -428,6 +428,12 @@ fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), G
         ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("NEE uniform in the light's cone, not by projected solid angle", |s| s.flags &= !FLAG_NEE_PROJECTED),
         ("NEE uniform in the light's cone, with MIS", |s| s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_MIS),
+        ("NEE uniform in the light's cone with the control variate", |s| {
+            s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_NEE_CONTROL
+        }),
+        ("the control variate with MIS, beside connections", |s| {
+            s.flags = with_connections(s.flags & !FLAG_NEE_PROJECTED) | FLAG_NEE_CONTROL | FLAG_MIS
+        }),
         ("Sobol points for every draw, not the first ones only", |s| s.flags |= FLAG_SOBOL_DEEP),
         ("the glow lobe off (cosine BSDF sampling only)", |s| s.flags &= !FLAG_GLOW),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),

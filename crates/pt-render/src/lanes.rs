@@ -35,10 +35,12 @@ use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
+use pt_core::params::{
+    FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
-use pt_core::sampler::{SOBOL_DRAWS, joint_draws};
+use pt_core::sampler::{JOINT_TRANSFORMS, SOBOL_DRAWS, all_draws_joint, joint_draws};
 use pt_core::sampling::{PI, sin_cos_taylor};
 use pt_core::wall::EDGE_SLACK;
 
@@ -536,15 +538,22 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
     /// `pt_core::sampler::joint_index` written out for the lanes.
     #[inline(always)]
     fn point_index(&self, seed: U) -> U {
-        let (joint, i) = (U::splat(self.joint), self.index);
-        let g = self.pair.wsub(joint);
+        let (joint, i) = (self.joint, self.index);
+        // `pt_core::sampler::joint_transform` on every lane.
+        let before = self.pair.lt(U::splat(joint));
+        let g = selu(before, self.pair.add(U::splat(joint.wrapping_sub(1))), self.pair.wsub(U::splat(joint)));
+        let g = selu(self.pair.lt(U::splat(2 * joint)), g, U::splat(JOINT_TRANSFORMS));
         let t1 = i.xor(i.shr::<2>()).xor(i.shr::<6>()).xor(i.shr::<7>());
         let t2 = i.xor(i.shr::<1>()).xor(i.shr::<4>()).xor(i.shr::<7>());
         let t3 = i.xor(i.shr::<1>()).xor(i.shr::<5>()).xor(i.shr::<8>());
         let t4 = i.xor(i.shr::<3>()).xor(i.shr::<7>());
         let at = |n: u32| g.eq(U::splat(n));
         let transformed = selu(at(0), i, selu(at(1), t1, selu(at(2), t2, selu(at(3), t3, t4))));
-        selu(g.lt(joint), transformed, self.shuffled_index(seed))
+        if all_draws_joint(DRAWS, joint) {
+            transformed
+        } else {
+            selu(g.lt(U::splat(JOINT_TRANSFORMS)), transformed, self.shuffled_index(seed))
+        }
     }
 
     /// `next_1d` on the lanes in `m`; the others draw nothing.
@@ -628,6 +637,8 @@ struct Frame<'a> {
     /// no wall shadows the light).
     connect: bool,
     projected: bool,
+    /// NEE's control variate (`FLAG_NEE_CONTROL`, and not `projected`).
+    control: bool,
     mis: bool,
     glow: bool,
     /// The glow lobe's probability where it is on.
@@ -659,6 +670,7 @@ impl<'a> Frame<'a> {
             nee: params.flags & FLAG_NEE != 0,
             connect: pt_core::integrator::connects(params.flags) && mask.is_empty(),
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
+            control: params.flags & (FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE_CONTROL,
             mis: params.flags & FLAG_MIS != 0,
             glow: glow > 0.0,
             glow_probability: glow,
@@ -1114,6 +1126,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         };
         let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live, frame.glow_probability);
         let projected = if frame.nee && frame.projected { cone.above_horizon(n) } else { M::splat(false) };
+        let control = if frame.nee && frame.control { cone.above_horizon(n) } else { M::splat(false) };
         if frame.nee {
             let m = live & !cone.empty;
             let (u1, u2) = self.sampler.next_2d(m);
@@ -1129,7 +1142,9 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
                 (dir, dist) = (selv(projected, p_dir, dir), sel(projected, p_dist, dist));
             }
             let cos = n.dot(dir);
-            let shoot = m & cos.gt(F::splat(0.0));
+            // The control variate's lanes count a blocked ray too.
+            let control = control & m;
+            let shoot = m & (cos.gt(F::splat(0.0)) | control);
             if shoot.any() {
                 let blocked = occluded(frame, origin, dir, wall_index, dist, shoot);
                 let bsdf = cos * (1.0 / PI);
@@ -1138,9 +1153,11 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
                 } else {
                     F::splat(1.0)
                 };
-                let value = sel(projected, cone.projected_over_pi(n), bsdf * weight / cone_pdf);
+                let whole = cone.projected_over_pi(n);
+                let value = sel(projected, whole, bsdf * weight / cone_pdf);
+                let value = sel(control, sel(blocked, whole - bsdf / cone_pdf, whole), value);
                 let add = (self.throughput * albedo).mulv(light.radiance).scale(value * self.direct_weight);
-                self.radiance = selv(shoot & !blocked, self.radiance + add, self.radiance);
+                self.radiance = selv(shoot & (!blocked | control), self.radiance + add, self.radiance);
             }
         }
         if frame.connect {
@@ -1166,7 +1183,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         let ok = cos.gt(F::splat(0.0)) & pdf.gt(F::splat(0.0));
         ended = ended | (live & !ok);
         live = live & ok;
-        self.bsdf_pdf = sel(live, sel(last | projected, F::splat(0.0), pdf), self.bsdf_pdf);
+        self.bsdf_pdf = sel(live, sel(last | projected | control, F::splat(0.0), pdf), self.bsdf_pdf);
         self.nee_pdf = sel(live, cone_pdf, self.nee_pdf);
         self.scatter_pdf = sel(live, pdf, self.scatter_pdf);
         let throughput = self.throughput * albedo.scale(cos * (1.0 / PI) / pdf);
