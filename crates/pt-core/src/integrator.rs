@@ -228,7 +228,7 @@ impl<S: Sampler> Path<S> {
             projected = above && params.flags & FLAG_NEE_PROJECTED != 0;
             // The control variate (`FLAG_NEE_CONTROL`): the unoccluded
             // cone's light is known, the shadow ray estimates what is lost.
-            control = above && params.flags & (FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE_CONTROL;
+            control = above && nee_control(params.flags);
             if nee && !cone.is_empty() {
                 let u = self.sampler.next_2d();
                 let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
@@ -338,6 +338,15 @@ impl<S: Sampler> Path<S> {
 pub fn roulette_acts(params: &FrameParams) -> bool {
     let ends_at_last_vertex = params.flags & FLAG_NEE != 0 && params.background.max_element() == 0.0;
     params.rr_start < params.max_bounces || (params.rr_start == params.max_bounces && !ends_at_last_vertex)
+}
+
+/// Whether NEE under integrator `flags` takes the control variate where
+/// the light's cone is above a vertex's horizon: `FLAG_NEE_CONTROL`, which
+/// needs `FLAG_NEE`, where `FLAG_NEE_PROJECTED` does not sample those
+/// vertices by projected solid angle instead.
+#[inline]
+pub fn nee_control(flags: u32) -> bool {
+    flags & (FLAG_NEE | FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE | FLAG_NEE_CONTROL
 }
 
 /// Whether integrator `flags` make connections through lit wall points
@@ -659,6 +668,15 @@ mod tests {
     /// The kind the flags pick (`FLAG_SOBOL_DEEP` means nothing without
     /// `FLAG_SOBOL`), and `ALL` lists the kinds in the order of their
     /// discriminants.
+    #[test]
+    fn the_control_variate_needs_nee_and_gives_way_to_projection() {
+        assert!(nee_control(FLAG_NEE | FLAG_NEE_CONTROL));
+        assert!(nee_control(FLAG_NEE | FLAG_NEE_CONTROL | FLAG_MIS | FLAG_CONNECT));
+        assert!(!nee_control(FLAG_NEE_CONTROL));
+        assert!(!nee_control(FLAG_NEE | FLAG_NEE_CONTROL | FLAG_NEE_PROJECTED));
+        assert!(!nee_control(FLAG_NEE));
+    }
+
     #[test]
     fn sampler_kind_follows_the_flags() {
         assert_eq!(SamplerKind::of(0), SamplerKind::Independent);

@@ -35,9 +35,7 @@ use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
 use pt_core::integrator::RR_MIN_SURVIVAL;
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
-use pt_core::params::{
-    FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
-};
+use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::{JOINT_TRANSFORMS, SOBOL_DRAWS, all_draws_joint, joint_draws};
@@ -637,7 +635,7 @@ struct Frame<'a> {
     /// no wall shadows the light).
     connect: bool,
     projected: bool,
-    /// NEE's control variate (`FLAG_NEE_CONTROL`, and not `projected`).
+    /// NEE's control variate (`pt_core::integrator::nee_control`).
     control: bool,
     mis: bool,
     glow: bool,
@@ -670,7 +668,7 @@ impl<'a> Frame<'a> {
             nee: params.flags & FLAG_NEE != 0,
             connect: pt_core::integrator::connects(params.flags) && mask.is_empty(),
             projected: params.flags & FLAG_NEE_PROJECTED != 0,
-            control: params.flags & (FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE_CONTROL,
+            control: pt_core::integrator::nee_control(params.flags),
             mis: params.flags & FLAG_MIS != 0,
             glow: glow > 0.0,
             glow_probability: glow,
@@ -1126,7 +1124,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         };
         let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live, frame.glow_probability);
         let projected = if frame.nee && frame.projected { cone.above_horizon(n) } else { M::splat(false) };
-        let control = if frame.nee && frame.control { cone.above_horizon(n) } else { M::splat(false) };
+        let control = if frame.control { cone.above_horizon(n) } else { M::splat(false) };
         if frame.nee {
             let m = live & !cone.empty;
             let (u1, u2) = self.sampler.next_2d(m);
