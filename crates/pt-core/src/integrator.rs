@@ -226,9 +226,10 @@ impl<S: Sampler> Path<S> {
             // projected solid angle and takes all of the light (no MIS).
             let above = nee && cone.above_horizon(n);
             projected = above && params.flags & FLAG_NEE_PROJECTED != 0;
-            // The control variate (`FLAG_NEE_CONTROL`): the unoccluded
-            // cone's light is known, the shadow ray estimates what is lost.
-            control = above && nee_control(params.flags);
+            // The control variate (`FLAG_NEE_CONTROL`): the cone's signed
+            // cosine has a known integral, and where the light is wholly
+            // visible above the horizon the estimate is exactly that.
+            control = nee && nee_control(params.flags) && !cone.is_empty();
             if nee && !cone.is_empty() {
                 let u = self.sampler.next_2d();
                 let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
@@ -249,13 +250,20 @@ impl<S: Sampler> Path<S> {
                     // f cos / pdf = (albedo / pi) cos / cone_pdf
                     bsdf * weight / cone_pdf
                 };
-                // The control variate counts every ray: the unoccluded cone's
-                // exact value, less the uniform sample's estimate where the
-                // ray is blocked (unbiased, exact where nothing blocks the
-                // light). One addition for both: on lavapipe each costs its
-                // code in every pass.
+                // The control variate counts every ray: `beta` times the
+                // integral of the cone's signed cosine over pi (`whole`),
+                // plus the sample's estimate where the ray reaches the light
+                // above the horizon, less `beta` times its estimate of the
+                // signed cosine. Unbiased for any `beta` fixed before the
+                // draw; `beta` is 1 where the cone is wholly above the
+                // horizon, and the estimate is then `whole` wherever nothing
+                // blocks the light (`LightCone::control_weight`). One
+                // addition for both: on lavapipe each costs its code in
+                // every pass.
                 let (counts, value) = if control {
-                    (true, if blocked { whole - value } else { whole })
+                    let kept = if blocked || cos <= 0.0 { 0.0 } else { 1.0 };
+                    let beta = cone.control_weight(n);
+                    (true, beta * whole + value * (kept - beta))
                 } else {
                     (cos > 0.0 && !blocked, value)
                 };
@@ -340,8 +348,8 @@ pub fn roulette_acts(params: &FrameParams) -> bool {
     params.rr_start < params.max_bounces || (params.rr_start == params.max_bounces && !ends_at_last_vertex)
 }
 
-/// Whether NEE under integrator `flags` takes the control variate where
-/// the light's cone is above a vertex's horizon: `FLAG_NEE_CONTROL`, which
+/// Whether NEE under integrator `flags` takes the control variate:
+/// `FLAG_NEE_CONTROL`, which
 /// needs `FLAG_NEE`, where `FLAG_NEE_PROJECTED` does not sample those
 /// vertices by projected solid angle instead.
 #[inline]

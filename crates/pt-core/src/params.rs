@@ -35,14 +35,16 @@ pub const FLAG_GLOW_SPARSE: u32 = 128;
 /// uniform about the light's centre), combined by MIS with the BSDF ray
 /// that could find the same wall point (`integrator`, "Connections").
 pub const FLAG_CONNECT: u32 = 256;
-/// `flags` bit, with `FLAG_NEE`: where the light's cone lies wholly above
-/// a vertex's horizon and `FLAG_NEE_PROJECTED` is off, the shadow ray's
-/// estimate is the exact light of the unoccluded cone less the uniform
-/// cone sample's estimate of that light where the ray is blocked: a control
-/// variate (the cone's cosine, whose integral `LightCone::projected_over_pi`
-/// gives), so the estimate is exact wherever the light is wholly visible,
-/// as with projection, for the cost of a dot product. NEE then takes all of
-/// that vertex's light: BSDF rays that reach the light count nothing.
+/// `flags` bit, with `FLAG_NEE`: where `FLAG_NEE_PROJECTED` is off, the
+/// uniform cone sample's estimate takes a control variate, the cone's
+/// signed cosine to the normal, whose integral (`LightCone::projected_over_pi`)
+/// is known at every tilt, weighted by `LightCone::control_weight` (1
+/// where the cone lies wholly above the vertex's horizon, falling to 0
+/// where it lies wholly below). Where the light is wholly visible above
+/// the horizon the estimate is then exact, as with projection, for the
+/// cost of a dot product; where the cone crosses the horizon the estimate
+/// is less noisy than the clamped cosine alone. NEE then takes all of the
+/// vertex's light: BSDF rays that reach the light count nothing.
 pub const FLAG_NEE_CONTROL: u32 = 512;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above

@@ -852,6 +852,12 @@ impl Cone {
     }
 
     #[inline(always)]
+    fn control_weight(&self, n: V3) -> F {
+        let t = (F::splat(0.5) + F::splat(0.5) * n.dot(self.axis) / self.sin2_max.sqrt()).clamp(0.0, 1.0);
+        t * t * (F::splat(3.0) - F::splat(2.0) * t)
+    }
+
+    #[inline(always)]
     fn projected_over_pi(&self, n: V3) -> F {
         self.sin2_max * n.dot(self.axis)
     }
@@ -1124,7 +1130,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         };
         let scatter = Scatter::new(n, &cone, M::splat(frame.glow) & !last & live, frame.glow_probability);
         let projected = if frame.nee && frame.projected { cone.above_horizon(n) } else { M::splat(false) };
-        let control = if frame.control { cone.above_horizon(n) } else { M::splat(false) };
+        let control = if frame.control { !cone.empty } else { M::splat(false) };
         if frame.nee {
             let m = live & !cone.empty;
             let (u1, u2) = self.sampler.next_2d(m);
@@ -1153,7 +1159,9 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
                 };
                 let whole = cone.projected_over_pi(n);
                 let value = sel(projected, whole, bsdf * weight / cone_pdf);
-                let value = sel(control, sel(blocked, whole - bsdf / cone_pdf, whole), value);
+                let kept = sel(blocked | cos.le(F::splat(0.0)), F::splat(0.0), F::splat(1.0));
+                let beta = cone.control_weight(n);
+                let value = sel(control, beta * whole + (bsdf / cone_pdf) * (kept - beta), value);
                 let add = (self.throughput * albedo).mulv(light.radiance).scale(value * self.direct_weight);
                 self.radiance = selv(shoot & (!blocked | control), self.radiance + add, self.radiance);
             }
