@@ -324,8 +324,8 @@ mod tests {
         open.light.center.y = 1.0;
         // The small light's default has connections; the large and open
         // lights' have the glow lobe at a tenth and none (the rule in
-        // pt_render::strategy). No default has MIS: NEE's control variate
-        // takes the light wherever the cone is above the horizon.
+        // pt_render::strategy). No default has MIS: with NEE's control
+        // variate NEE takes all of the light.
         for scene in [&small, &large, &open] {
             assert_eq!(scene.default_flags() & FLAG_MIS, 0);
         }
