@@ -20,8 +20,8 @@ pub use report::*;
 pub use throughput::*;
 
 use pt_core::params::{
-    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
-    FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL,
+    FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
 use pt_render::strategy::with_connections;
@@ -112,6 +112,9 @@ pub enum StrategyId {
     /// alone) where the default has it (every scene's default does), else
     /// on.
     ControlSwitched,
+    /// The light edge's control variate switched: off where the default
+    /// has it (every scene's default does), else on.
+    EdgeSwitched,
     /// Connections through lit wall points switched: off (the glow lobe at
     /// the light's share instead) where the default has them, on (in the
     /// lobe's place) where it has not.
@@ -180,10 +183,10 @@ const _: () = assert!(
 /// The strategies compared; the first is the default configuration (the
 /// scene's default flags, `DEFAULT_RR_START`, `DEFAULT_SPP_PER_FRAME`),
 /// each other changes one thing from it on the same scene.
-pub const STRATEGIES: [Strategy; 15] = [
+pub const STRATEGIES: [Strategy; 16] = [
     Strategy {
         id: StrategyId::Default,
-        name: "default: NEE uniform in the light's cone with a control variate (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, RR from 5, 64 spp/frame",
+        name: "default: NEE uniform in the light's cone with a control variate (no MIS), connections through lit wall points with Sobol for every draw around small lights (the glow lobe too beside two walls) or else the glow lobe (a quarter, a tenth around large lights, none in the open) with Sobol for the first 5 draws, the light's edge in the image by a control variate, RR from 5, 64 spp/frame",
         flags: |f| f,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
@@ -272,6 +275,13 @@ pub const STRATEGIES: [Strategy; 15] = [
         id: StrategyId::ControlSwitched,
         name: "NEE's control variate switched (off where the default has it; else on)",
         flags: |f| f ^ FLAG_NEE_CONTROL,
+        rr_start: DEFAULT_RR_START,
+        spp_per_frame: DEFAULT_SPP_PER_FRAME,
+    },
+    Strategy {
+        id: StrategyId::EdgeSwitched,
+        name: "the light edge's control variate switched (off where the default has it; else on)",
+        flags: |f| f ^ FLAG_LIGHT_EDGE,
         rr_start: DEFAULT_RR_START,
         spp_per_frame: DEFAULT_SPP_PER_FRAME,
     },
@@ -369,6 +379,10 @@ mod tests {
             let control = StrategyId::ControlSwitched.strategy().flags_for(scene);
             assert_ne!(scene.default_flags() & FLAG_NEE_CONTROL, 0);
             assert_eq!(control, scene.default_flags() & !FLAG_NEE_CONTROL);
+            // Every default has the light edge's control variate too.
+            let edge = StrategyId::EdgeSwitched.strategy().flags_for(scene);
+            assert_ne!(scene.default_flags() & FLAG_LIGHT_EDGE, 0);
+            assert_eq!(edge, scene.default_flags() & !FLAG_LIGHT_EDGE);
         }
     }
 

@@ -9,12 +9,13 @@ use spirv_std::glam::Vec3;
 
 use crate::accum::{PixelSamples, is_finite, kahan_add};
 use crate::bsdf::{Scatter, glow_probability};
+use crate::camera::LightEdge;
 use crate::geometry::Geometry;
 use crate::instrument::{NoRayCount, RayCounter};
 use crate::light::light_cone;
 use crate::params::{
-    FLAG_CONNECT, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL,
-    FLAG_SOBOL_DEEP, FrameParams,
+    FLAG_CONNECT, FLAG_LIGHT_EDGE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE,
+    FLAG_SOBOL, FLAG_SOBOL_DEEP, FrameParams,
 };
 use crate::query::{Hit, HitKind, NO_WALL, SceneView, ShadowWalls, T_FAR};
 use crate::ray::{Ray, offset_origin};
@@ -70,10 +71,12 @@ impl<S: Sampler> Path<S> {
     /// part is `pixel` (`S::for_pixel(x, y, params)`): a primary ray
     /// jittered uniformly in the pixel (a box filter) by the sampler's first
     /// pair.
-    pub fn camera(x: u32, y: u32, pixel: S::Pixel, s: u32, params: &FrameParams) -> Self {
+    /// `edge` is the pixel's [`LightEdge`] ([`LightEdge::NONE`] without
+    /// `FLAG_LIGHT_EDGE`).
+    pub fn camera(x: u32, y: u32, pixel: S::Pixel, s: u32, edge: &LightEdge, params: &FrameParams) -> Self {
         let mut path = Self::start(pixel, s, params);
         let u = path.sampler.next_2d();
-        path.aim_camera(x, y, u, params);
+        path.aim_camera(x, y, u, edge, params);
         path
     }
 
@@ -97,10 +100,12 @@ impl<S: Sampler> Path<S> {
     }
 
     /// The primary ray through pixel (`x`, `y`) jittered by `u`, the
-    /// first pair of a path just started.
-    fn aim_camera(&mut self, x: u32, y: u32, u: spirv_std::glam::Vec2, params: &FrameParams) {
+    /// first pair of a path just started, which starts with the light
+    /// edge's control variate term at `u`.
+    fn aim_camera(&mut self, x: u32, y: u32, u: spirv_std::glam::Vec2, edge: &LightEdge, params: &FrameParams) {
         let ray = params.camera.ray(x as f32 + u.x, y as f32 + u.y, params.width, params.height);
         (self.origin, self.dir) = (ray.origin, ray.dir);
+        self.radiance = edge.term(u);
     }
 
     /// Traces the current ray to its closest hit in `scene` and shades it:
@@ -114,7 +119,7 @@ impl<S: Sampler> Path<S> {
     /// light, the bounce limit, the last vertex; or a path that ended at its
     /// previous step), the step writes its radiance to `finished`, returns
     /// true, and starts the pixel's next sample (`next` of pixel (`x`, `y`),
-    /// sampler part `pixel`) in its place: the next sample's camera ray
+    /// sampler part `pixel`, light edge `edge`) in its place: the next sample's camera ray
     /// takes the draw that a continuing path spends on its BSDF direction.
     /// lavapipe runs every line of the loop in every pass, masked, so a
     /// camera draw of its own, after the step, cost a Sobol draw per pass
@@ -141,7 +146,7 @@ impl<S: Sampler> Path<S> {
         scene: &V,
         shadow_walls: &ShadowWalls,
         rays: &mut C,
-        (x, y, pixel, next): (u32, u32, S::Pixel, u32),
+        (x, y, pixel, next, edge): (u32, u32, S::Pixel, u32, &LightEdge),
         finished: &mut Vec3,
     ) -> bool {
         let nee = params.flags & FLAG_NEE != 0;
@@ -287,7 +292,7 @@ impl<S: Sampler> Path<S> {
         // One draw: the next sample's pixel jitter, or the BSDF direction.
         let u = self.sampler.next_2d();
         if ended {
-            self.aim_camera(x, y, u, params);
+            self.aim_camera(x, y, u, edge, params);
         } else {
             // BSDF sampling. The throughput takes f cos / pdf = albedo cos / (pi
             // pdf): albedo alone for the cosine lobe. A glow-lobe direction below
@@ -355,6 +360,18 @@ pub fn roulette_acts(params: &FrameParams) -> bool {
 #[inline]
 pub fn nee_control(flags: u32) -> bool {
     flags & (FLAG_NEE | FLAG_NEE_PROJECTED | FLAG_NEE_CONTROL) == FLAG_NEE | FLAG_NEE_CONTROL
+}
+
+/// The light edge's control variate for pixel (`x`, `y`) of the frame
+/// `params` describe: [`LightEdge::of_pixel`] under `FLAG_LIGHT_EDGE`, else
+/// [`LightEdge::NONE`].
+#[inline]
+pub fn light_edge(x: u32, y: u32, params: &FrameParams) -> LightEdge {
+    if params.flags & FLAG_LIGHT_EDGE == 0 {
+        return LightEdge::NONE;
+    }
+    let light = (params.light.center, params.light.radius, params.light.radiance);
+    LightEdge::of_pixel(&params.camera, light, x, y, params.width, params.height)
 }
 
 /// Whether integrator `flags` make connections through lit wall points
@@ -596,13 +613,20 @@ fn pixel_samples<
     let mut compensation = Vec3::ZERO;
     let shadow_walls = ShadowWalls::new(params, geometry);
     let pixel = S::for_pixel(x, y, params);
+    let edge = light_edge(x, y, params);
     let mut s = 0;
-    let mut path = Path::<S>::camera(x, y, pixel, s, params);
+    let mut path = Path::<S>::camera(x, y, pixel, s, &edge, params);
     let mut l = Vec3::ZERO;
     while s < params.samples_per_frame {
         // After the pixel's last sample the step starts one more, unused.
-        if path.step::<V, C, CONNECT, GLOW, ROULETTE>(params, scene, &shadow_walls, rays, (x, y, pixel, s + 1), &mut l)
-        {
+        if path.step::<V, C, CONNECT, GLOW, ROULETTE>(
+            params,
+            scene,
+            &shadow_walls,
+            rays,
+            (x, y, pixel, s + 1, &edge),
+            &mut l,
+        ) {
             if is_finite(l) {
                 // Always true; the compiler cannot know it (see kahan_add).
                 kahan_add(&mut out.sum, &mut compensation, l, params.keeps_sums());

@@ -46,6 +46,12 @@ pub const FLAG_CONNECT: u32 = 256;
 /// is less noisy than the clamped cosine alone. NEE then takes all of the
 /// vertex's light: BSDF rays that reach the light count nothing.
 pub const FLAG_NEE_CONTROL: u32 = 512;
+/// `flags` bit: camera samples take the control variate of the light's
+/// silhouette (`camera::LightEdge`): in pixels that the light's edge
+/// crosses, the box filter's integral of the step from the room to the
+/// light is known for a straight edge, and only the sliver between that
+/// line and the silhouette stays noisy.
+pub const FLAG_LIGHT_EDGE: u32 = 1024;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above
 /// the horizon) and the glow lobe, on Owen-scrambled Sobol samples for the

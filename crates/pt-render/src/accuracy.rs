@@ -16,8 +16,8 @@ use std::f64::consts::PI;
 
 use pt_core::glam::{DVec3, Vec3};
 use pt_core::params::{
-    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
-    FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_MIS, FLAG_NEE, FLAG_NEE_CONTROL,
+    FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
 };
 use pt_core::rng::Rng;
 use pt_core::{FrameParams, Sphere, SphereLight, Wall, light};
@@ -412,7 +412,7 @@ fn default_small() -> Setup {
 fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), GpuError> {
     let base = default_small();
     let (ref_images, bad0) = base.images(t, 0..SEEDS)?;
-    let variants: [Variant; 19] = [
+    let variants: [Variant; 20] = [
         ("connections instead of the glow lobe (the default in a room that does not shadow the light)", |s| {
             s.flags = with_connections(s.flags)
         }),
@@ -435,6 +435,7 @@ fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), G
             s.flags = with_connections(s.flags & !FLAG_NEE_PROJECTED) | FLAG_NEE_CONTROL | FLAG_MIS
         }),
         ("Sobol points for every draw, not the first ones only", |s| s.flags |= FLAG_SOBOL_DEEP),
+        ("the light's edge in the image by its control variate", |s| s.flags |= FLAG_LIGHT_EDGE),
         ("the glow lobe off (cosine BSDF sampling only)", |s| s.flags &= !FLAG_GLOW),
         ("NEE off (BSDF sampling only)", |s| s.flags = 0),
         ("NEE alone on independent samples, cosine lobe only", |s| s.flags = FLAG_NEE),

@@ -31,9 +31,10 @@ use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 use pt_core::FrameParams;
 use pt_core::accum::PixelSamples;
 use pt_core::bsdf::glow_probability;
+use pt_core::camera::LightEdge;
 use pt_core::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use pt_core::glam::Vec3;
-use pt_core::integrator::RR_MIN_SURVIVAL;
+use pt_core::integrator::{RR_MIN_SURVIVAL, light_edge};
 use pt_core::light::{GLOW_MIN_SCALE, GLOW_REACH};
 use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP};
 use pt_core::query::ShadowWalls;
@@ -958,6 +959,47 @@ impl Scatter {
     }
 }
 
+/// [`LightEdge`] per lane: each lane's pixel's ellipse, computed by the
+/// scalar code, so the lanes add the scalar loop's terms bit for bit.
+struct Edge {
+    a00: F,
+    a01: F,
+    a11: F,
+    y0x: F,
+    y0y: F,
+    share: F,
+    radiance: V3,
+}
+
+impl Edge {
+    /// The edges of pixels `x0`, `x0 + 1`, ... of row `y`
+    /// ([`light_edge`]).
+    #[inline(always)]
+    fn of_pixels(x0: u32, y: u32, params: &FrameParams) -> Self {
+        let e: [LightEdge; LANES] = from_fn(|i| light_edge(x0 + i as u32, y, params));
+        let lanes = |f: fn(&LightEdge) -> f32| F::from_array(from_fn(|i| f(&e[i])));
+        Self {
+            a00: lanes(|e| e.a00),
+            a01: lanes(|e| e.a01),
+            a11: lanes(|e| e.a11),
+            y0x: lanes(|e| e.y0.x),
+            y0y: lanes(|e| e.y0.y),
+            share: lanes(|e| e.share),
+            radiance: V3 { x: lanes(|e| e.radiance.x), y: lanes(|e| e.radiance.y), z: lanes(|e| e.radiance.z) },
+        }
+    }
+
+    /// `LightEdge::term` for the jitters (`ux`, `uy`).
+    #[inline(always)]
+    fn term(&self, ux: F, uy: F) -> V3 {
+        let (zx, zy) = (ux - 0.5, uy - 0.5);
+        let yx = self.a00 * zx + self.a01 * zy + self.y0x;
+        let yy = self.a11 * zy + self.y0y;
+        let inside = sel((yx * yx + yy * yy).le(F::splat(1.0)), F::splat(1.0), F::splat(0.0));
+        self.radiance.scale(self.share - inside)
+    }
+}
+
 /// Eight paths in flight: [`pt_core::integrator::Path`] per lane.
 #[derive(Copy, Clone)]
 struct Paths<const DRAWS: u32, const PCG: bool> {
@@ -977,9 +1019,10 @@ struct Paths<const DRAWS: u32, const PCG: bool> {
 impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
     /// `Path::camera` for sample `s` of each lane's pixel.
     #[inline(always)]
-    fn camera(x: U, y: U, pixel: U, s: U, params: &FrameParams) -> Self {
+    fn camera(x: U, y: U, pixel: U, s: U, edge: &Edge, params: &FrameParams) -> Self {
         let mut sampler = Sampler::for_camera_sample(pixel, x, y, s, params);
         let (ux, uy) = sampler.next_2d(M::splat(true));
+        let radiance = edge.term(ux, uy);
         let cam = &params.camera;
         let fx = x.to_f32() + ux;
         let fy = y.to_f32() + uy;
@@ -989,7 +1032,7 @@ impl<const DRAWS: u32, const PCG: bool> Paths<DRAWS, PCG> {
         Self {
             origin: V3::splat(cam.position),
             dir,
-            radiance: V3::splat(Vec3::ZERO),
+            radiance,
             throughput: V3::splat(Vec3::ONE),
             bounces: U::splat(0),
             skip_wall: U::splat(NO_WALL),
@@ -1338,12 +1381,13 @@ fn occluded(frame: &Frame, o: V3, d: V3, skip_wall: U, t_max: F, m: M) -> M {
 fn group<const DRAWS: u32, const PCG: bool>(frame: &Frame, x0: u32, y: u32, count: usize) -> [PixelSamples; LANES] {
     let params = frame.params;
     let x = U::from_array(from_fn(|i| x0 + i as u32));
-    let y = U::splat(y);
-    let pixel = Sampler::<DRAWS, PCG>::for_pixel(x, y, params);
+    let pixel = Sampler::<DRAWS, PCG>::for_pixel(x, U::splat(y), params);
     let spp = params.samples_per_frame;
     let mut s = U::splat(0);
     let mut act = M(U::from_array(from_fn(|i| if i < count && spp > 0 { u32::MAX } else { 0 })).0);
-    let mut paths = Paths::<DRAWS, PCG>::camera(x, y, pixel, s, params);
+    let edge = Edge::of_pixels(x0, y, params);
+    let y = U::splat(y);
+    let mut paths = Paths::<DRAWS, PCG>::camera(x, y, pixel, s, &edge, params);
     let mut sum = V3::splat(Vec3::ZERO);
     let mut compensation = V3::splat(Vec3::ZERO);
     let mut valid = U::splat(0);
@@ -1367,7 +1411,7 @@ fn group<const DRAWS: u32, const PCG: bool>(frame: &Frame, x0: u32, y: u32, coun
         act = act & !(ended & !more);
         let restart = ended & more;
         if restart.any() {
-            paths = Paths::select(restart, Paths::camera(x, y, pixel, s, params), paths);
+            paths = Paths::select(restart, Paths::camera(x, y, pixel, s, &edge, params), paths);
         }
     }
     let (sx, sy, sz) = (sum.x.to_array(), sum.y.to_array(), sum.z.to_array());
