@@ -102,7 +102,7 @@ impl LightEdge {
     /// `w` (`a` the sphere's angular radius), a quadratic inequality in `z`.
     /// Its matrix's Cholesky factor maps the ellipse to the unit disk and
     /// the pixel to a parallelogram, whose area inside the disk is a sum of
-    /// triangles and circular sectors ([`disk_triangle`]).
+    /// triangles and circular sectors ([`disk_quad_area`]).
     /// [`LightEdge::NONE`] where the camera is in the light (which shows
     /// nothing from inside) or the cone's section is no ellipse in front of
     /// the camera (a light beside or behind it).
@@ -148,23 +148,13 @@ impl LightEdge {
         let (a00, a01, a11) = (r00 * scale, r01 * scale, r11 * scale);
         let y0 = -Vec2::new(a00 * z0.x + a01 * z0.y, a11 * z0.y);
         let map = |zx: f32, zy: f32| Vec2::new(a00 * zx + a01 * zy, a11 * zy) + y0;
-        // The pixel's corners, counter-clockwise (R keeps the orientation);
-        // written out, not looped over an array, which the kernel would
-        // keep in per-invocation memory.
-        let (c0, c1, c2, c3) = (map(-0.5, -0.5), map(0.5, -0.5), map(0.5, 0.5), map(-0.5, 0.5));
-        let (e0, e1, e2, e3) =
-            (disk_triangle(c0, c1), disk_triangle(c1, c2), disk_triangle(c2, c3), disk_triangle(c3, c0));
-        let area = e0.0 + e1.0 + e2.0 + e3.0;
-        let enters = e0.1 || e1.1 || e2.1 || e3.1;
-        let all_inside = c0.dot(c0) <= 1.0 && c1.dot(c1) <= 1.0 && c2.dot(c2) <= 1.0 && c3.dot(c3) <= 1.0;
-        // The origin (the disk's centre) is left of every edge.
-        let left = |a: Vec2, b: Vec2| (b - a).perp_dot(-a) >= 0.0;
-        let origin_inside = left(c0, c1) && left(c1, c2) && left(c2, c3) && left(c3, c0);
+        // The pixel's corners, counter-clockwise (R keeps the orientation).
+        let (area, enters, all_inside) = disk_quad_area(map(-0.5, -0.5), map(0.5, -0.5), map(0.5, 0.5), map(-0.5, 0.5));
         // Exactly 1 or 0 where the disk holds or misses the whole pixel, so
         // that those pixels add nothing at all.
         let share = if all_inside {
             1.0
-        } else if !enters && !origin_inside {
+        } else if !enters && area == 0.0 {
             0.0
         } else {
             (area / (a00 * a11)).clamp(0.0, 1.0)
@@ -185,15 +175,38 @@ impl LightEdge {
     }
 }
 
-/// The signed area of the unit disk inside the triangle of the origin, `a`
-/// and `b` (positive where `a`, `b` turn counter-clockwise about the
-/// origin), and whether the segment from `a` to `b` passes inside the
-/// disk. The segment splits where it crosses the circle: its parts inside
-/// bound triangles, its parts outside circular sectors. Summed over a
-/// convex polygon's edges in order, the areas give the polygon's area
-/// inside the disk.
+/// The area of the unit disk inside the convex quadrilateral `c0 c1 c2
+/// c3` (counter-clockwise), whether any of its edges passes inside the
+/// disk, and whether it lies wholly inside. Written out for four corners,
+/// not looped over an array, which the kernel would keep in
+/// per-invocation memory.
+///
+/// The disk's area inside the triangle of its centre and an edge is, with
+/// `p1`, `p2` the ends of the edge's chord (both at an end where the edge
+/// misses the disk), half the angle the edge subtends plus the triangle of
+/// the chord less its circular sector ([`chord_term`]). Around a closed
+/// polygon the angles sum to a full turn where the centre is inside and to
+/// nothing where it is outside: pi or 0, and one arctangent per edge.
 #[inline]
-pub fn disk_triangle(a: Vec2, b: Vec2) -> (f32, bool) {
+pub fn disk_quad_area(c0: Vec2, c1: Vec2, c2: Vec2, c3: Vec2) -> (f32, bool, bool) {
+    let (e0, e1, e2, e3) = (chord_term(c0, c1), chord_term(c1, c2), chord_term(c2, c3), chord_term(c3, c0));
+    // The centre (the origin) is left of every edge.
+    let left = |a: Vec2, b: Vec2| (b - a).perp_dot(-a) >= 0.0;
+    let centre_inside = left(c0, c1) && left(c1, c2) && left(c2, c3) && left(c3, c0);
+    let turn = if centre_inside { core::f32::consts::PI } else { 0.0 };
+    let area = turn + e0.0 + e1.0 + e2.0 + e3.0;
+    let enters = e0.1 || e1.1 || e2.1 || e3.1;
+    let all_inside = c0.dot(c0) <= 1.0 && c1.dot(c1) <= 1.0 && c2.dot(c2) <= 1.0 && c3.dot(c3) <= 1.0;
+    (area, enters, all_inside)
+}
+
+/// The part of the segment from `a` to `b` inside the unit disk, from
+/// `p1` to `p2`: half its chord's cross product less half the angle it
+/// subtends at the centre (the triangle of the chord less its circular
+/// sector; 0 where the segment misses the disk), and whether there is
+/// such a part.
+#[inline]
+pub fn chord_term(a: Vec2, b: Vec2) -> (f32, bool) {
     let d = b - a;
     let dd = d.dot(d);
     let ad = a.dot(d);
@@ -207,8 +220,8 @@ pub fn disk_triangle(a: Vec2, b: Vec2) -> (f32, bool) {
         (1.0, 1.0)
     };
     let (p1, p2) = (a + d * t1, a + d * t2);
-    let sector = |u: Vec2, v: Vec2| 0.5 * u.perp_dot(v).atan2(u.dot(v));
-    (sector(a, p1) + 0.5 * p1.perp_dot(p2) + sector(p2, b), t2 > t1)
+    let cross = p1.perp_dot(p2);
+    (0.5 * (cross - cross.atan2(p1.dot(p2))), t2 > t1)
 }
 
 #[cfg(test)]
@@ -216,10 +229,10 @@ mod tests {
     use super::*;
     use spirv_std::glam::Vec2;
 
-    /// The area of the unit disk inside the convex polygon `corners`
-    /// (counter-clockwise), by [`disk_triangle`].
-    fn disk_polygon(corners: &[Vec2]) -> f32 {
-        (0..corners.len()).map(|i| disk_triangle(corners[i], corners[(i + 1) % corners.len()]).0).sum()
+    /// The area of the unit disk inside the quadrilateral `corners`
+    /// (counter-clockwise), by [`disk_quad_area`].
+    fn disk_polygon(corners: &[Vec2; 4]) -> f32 {
+        disk_quad_area(corners[0], corners[1], corners[2], corners[3]).0
     }
 
     /// Case: squares wholly inside the disk, around it, beside it, across
@@ -227,7 +240,7 @@ mod tests {
     /// Exact values where the geometry gives them, else a count on a
     /// 2000 x 2000 grid over the polygon (within 2e-3 of the area).
     #[test]
-    fn disk_triangles_sum_to_a_polygons_area_inside_the_disk() {
+    fn disk_quad_area_is_a_quadrilaterals_area_inside_the_disk() {
         let square = |cx: f32, cy: f32, h: f32| {
             [Vec2::new(cx - h, cy - h), Vec2::new(cx + h, cy - h), Vec2::new(cx + h, cy + h), Vec2::new(cx - h, cy + h)]
         };
@@ -235,9 +248,9 @@ mod tests {
         close(disk_polygon(&square(0.1, -0.2, 0.3)), 0.36, 1e-6);
         close(disk_polygon(&square(0.0, 0.0, 3.0)), core::f32::consts::PI, 1e-5);
         close(disk_polygon(&square(3.0, 0.5, 0.4)), 0.0, 1e-6);
-        // Half the disk: the square [0, 2] x [-2, 2].
-        let half = [Vec2::new(0.0, -2.0), Vec2::new(2.0, -2.0), Vec2::new(2.0, 2.0), Vec2::new(0.0, 2.0)];
-        close(disk_polygon(&half), 0.5 * core::f32::consts::PI, 1e-5);
+        // The circular segment beyond x = 1/2: pi / 3 - sqrt(3) / 4.
+        let segment = [Vec2::new(0.5, -2.0), Vec2::new(2.0, -2.0), Vec2::new(2.0, 2.0), Vec2::new(0.5, 2.0)];
+        close(disk_polygon(&segment), core::f32::consts::PI / 3.0 - 3.0f32.sqrt() / 4.0, 1e-6);
         let thin = [Vec2::new(-1.5, -0.05), Vec2::new(1.5, 0.0), Vec2::new(1.5, 0.1), Vec2::new(-1.5, 0.05)];
         for corners in [square(0.9, 0.3, 0.25), square(-0.6, -0.7, 0.5), thin] {
             let (lo, hi) = corners
