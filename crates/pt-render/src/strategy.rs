@@ -430,6 +430,56 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
 /// that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
+    let flags = sampling_rule(scene);
+    if silhouette_in_view(scene) { flags } else { flags & !FLAG_LIGHT_EDGE }
+}
+
+/// Azimuths per ring of [`silhouette_in_view`].
+const SILHOUETTE_AZIMUTHS: u32 = 256;
+
+/// Whether the camera sees the rim of the light's image with nothing in
+/// front of it: rays from the camera at 0.8, 0.95 and 0.995 of the light's
+/// angular radius from its centre, 256 about it on each ring, meet the
+/// light before any wall or sphere. The light edge's control variate
+/// (`FLAG_LIGHT_EDGE`) counts the light's share of each pixel its
+/// silhouette crosses; where a sphere or a wall hides that part of the
+/// silhouette, the pixel shows the nearer surface, and the control variate
+/// adds a step as high as the light's radiance to it that was not there:
+/// on a probe scene whose large sphere hides part of the light's rim
+/// (scenes/probe/low-medium.toml) the default took 1.20x the time without
+/// it on lavapipe and 1.13x on the CPU. False where the camera is inside
+/// the light.
+pub fn silhouette_in_view(scene: &Scene) -> bool {
+    let light = scene.light;
+    let origin = scene.camera.position;
+    let to_center = light.center - origin;
+    let d2 = to_center.dot(to_center);
+    if d2 <= light.radius * light.radius {
+        return false;
+    }
+    let axis = to_center / d2.sqrt();
+    let angle = (light.radius / d2.sqrt()).asin();
+    [0.8f32, 0.95, 0.995].iter().all(|&f| {
+        (0..SILHOUETTE_AZIMUTHS).all(|k| {
+            let (sin, cos) = (f * angle).sin_cos();
+            let dir = pt_core::sampling::about_axis(axis, cos, sin, k as f32 / SILHOUETTE_AZIMUTHS as f32);
+            let ray = Ray { origin, dir };
+            let to_light = pt_core::sphere::intersect_sphere(light.center, light.radius, &ray, 0.0, f32::INFINITY);
+            let mut hit = Hit::none(f32::INFINITY);
+            for (i, w) in scene.walls.iter().enumerate() {
+                hit.test_wall(i as u32, &w.wall, &ray);
+            }
+            for (i, sp) in scene.spheres.iter().enumerate() {
+                hit.test_sphere(i as u32, &sp.sphere, &ray);
+            }
+            to_light < hit.t
+        })
+    })
+}
+
+/// [`default_flags`] before the light edge's control variate is left out
+/// where something hides the light's silhouette.
+fn sampling_rule(scene: &Scene) -> u32 {
     // The extent, a cone per grid point (1,792 in the default scene),
     // decides both rules here: worked out once.
     let extent = light_extent(scene);
@@ -615,6 +665,38 @@ mod tests {
         assert!((nearest_on_wall(floor, p) - Vec3::new(0.3, 0.0, -0.2)).length() < 1e-6);
     }
 
+    /// The camera sees every suite, held-out and probe light's rim but one:
+    /// in the probe whose large sphere stands before part of it, the light
+    /// edge's control variate is off.
+    #[test]
+    fn the_light_edge_control_variate_is_off_where_something_hides_the_lights_rim() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut seen = 0;
+        for sub in [dir.clone(), dir.join("holdout"), dir.join("probe")] {
+            for entry in std::fs::read_dir(&sub).unwrap() {
+                let path = entry.unwrap().path();
+                if path.extension().is_none_or(|e| e != "toml") {
+                    continue;
+                }
+                let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+                let scene = Scene::load(&path).unwrap();
+                let hidden = name == "low-medium";
+                assert_eq!(silhouette_in_view(&scene), !hidden, "{name}");
+                assert_eq!(default_flags(&scene) & FLAG_LIGHT_EDGE == 0, hidden, "{name}");
+                seen += 1;
+            }
+        }
+        assert_eq!(seen, 28);
+        // A sphere moved in front of the default light's edge hides it.
+        let mut scene = Scene::default_scene();
+        assert!(silhouette_in_view(&scene));
+        // On the way from the camera to the light's right rim, 1.9 from
+        // the camera.
+        scene.spheres[1].sphere.center = Vec3::new(0.084, 1.391, 1.5);
+        scene.spheres[1].sphere.radius = 0.02;
+        assert!(!silhouette_in_view(&scene));
+    }
+
     #[test]
     fn the_suites_scenes_get_the_strategies_the_suite_measured_best() {
         // The glow lobe at a tenth: the bright room, the lights of radius
@@ -783,7 +865,8 @@ mod tests {
             ("corner-hot", quarter),
             ("edge-mild", tenth),
             ("edge-small", tenth),
-            ("low-medium", sparse()),
+            // Its large sphere hides part of the light's rim.
+            ("low-medium", sparse() & !FLAG_LIGHT_EDGE),
             ("mid-large", in_the_open()),
             ("near-large", sparse()),
             ("open-large", in_the_open()),
