@@ -112,7 +112,9 @@ impl LightEdge {
         let to_center = center - camera.position;
         let d2 = to_center.dot(to_center);
         let r2 = radius * radius;
-        if !(d2 > r2) {
+        // Written so that a NaN distance also gives no control variate.
+        let outside = d2 > r2;
+        if !outside {
             return Self::NONE;
         }
         let w = to_center / d2.sqrt();
