@@ -670,23 +670,13 @@ mod tests {
     /// edge's control variate is off.
     #[test]
     fn the_light_edge_control_variate_is_off_where_something_hides_the_lights_rim() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let mut seen = 0;
-        for sub in [dir.clone(), dir.join("holdout"), dir.join("probe")] {
-            for entry in std::fs::read_dir(&sub).unwrap() {
-                let path = entry.unwrap().path();
-                if path.extension().is_none_or(|e| e != "toml") {
-                    continue;
-                }
-                let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-                let scene = Scene::load(&path).unwrap();
-                let hidden = name == "low-medium";
-                assert_eq!(silhouette_in_view(&scene), !hidden, "{name}");
-                assert_eq!(default_flags(&scene) & FLAG_LIGHT_EDGE == 0, hidden, "{name}");
-                seen += 1;
-            }
+        let scenes = scene_files(&["", "holdout", "probe"]);
+        assert_eq!(scenes.len(), 28);
+        for (name, scene) in scenes {
+            let hidden = name == "low-medium";
+            assert_eq!(silhouette_in_view(&scene), !hidden, "{name}");
+            assert_eq!(default_flags(&scene) & FLAG_LIGHT_EDGE == 0, hidden, "{name}");
         }
-        assert_eq!(seen, 28);
         // A sphere moved in front of the default light's edge hides it.
         let mut scene = Scene::default_scene();
         assert!(silhouette_in_view(&scene));
@@ -705,30 +695,37 @@ mod tests {
         // none: the large lights in the open, of
         // radius 0.25 in the middle of the room, 0.19 and 0.22 off centre; at a
         // quarter, every other scene.
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
         let tenth = ["bright-room", "light-large", "light-medium", "light-ceiling-wide", "light-wall-medium"];
         let none = ["light-centre", "light-free-small", "light-open-mid"];
-        let mut seen = 0;
-        for sub in [dir.clone(), dir.join("holdout")] {
-            for entry in std::fs::read_dir(&sub).unwrap() {
+        let scenes = scene_files(&["", "holdout"]);
+        assert_eq!(scenes.len(), 18);
+        for (name, scene) in scenes {
+            let expected = if tenth.contains(&name.as_str()) {
+                sparse()
+            } else if none.contains(&name.as_str()) {
+                in_the_open()
+            } else {
+                BASE_FLAGS
+            };
+            assert_eq!(glow_flags(&scene), expected, "{name}");
+        }
+    }
+
+    /// The scenes of `scenes/` and of its folders `subs` ("" for itself),
+    /// by file name without `.toml`.
+    fn scene_files(subs: &[&str]) -> Vec<(String, Scene)> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut scenes = Vec::new();
+        for sub in subs {
+            for entry in std::fs::read_dir(dir.join(sub)).unwrap() {
                 let path = entry.unwrap().path();
-                if path.extension().is_none_or(|e| e != "toml") {
-                    continue;
+                if path.extension().is_some_and(|e| e == "toml") {
+                    let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+                    scenes.push((name, Scene::load(&path).unwrap()));
                 }
-                let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-                let scene = Scene::load(&path).unwrap();
-                let expected = if tenth.contains(&name.as_str()) {
-                    sparse()
-                } else if none.contains(&name.as_str()) {
-                    in_the_open()
-                } else {
-                    BASE_FLAGS
-                };
-                assert_eq!(glow_flags(&scene), expected, "{name}");
-                seen += 1;
             }
         }
-        assert_eq!(seen, 18);
+        scenes
     }
 
     /// Connections replace the glow lobe around the small lights wherever
