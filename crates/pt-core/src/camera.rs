@@ -6,6 +6,7 @@ use spirv_std::num_traits::Float;
 use bytemuck::{Pod, Zeroable};
 use spirv_std::glam::{Vec2, Vec3};
 
+use crate::light::SphereLight;
 use crate::ray::Ray;
 use crate::sampling::orthonormal_basis;
 
@@ -48,10 +49,15 @@ impl Camera {
     /// The primary ray through film point (`fx`, `fy`) in pixels, row 0 at
     /// the top, for a `width` x `height` image.
     pub fn ray(&self, fx: f32, fy: f32, width: u32, height: u32) -> Ray {
+        Ray { origin: self.position, dir: self.direction(fx, fy, width, height).normalize() }
+    }
+
+    /// The unnormalised direction of [`Camera::ray`]: affine in (`fx`, `fy`).
+    #[inline]
+    pub fn direction(&self, fx: f32, fy: f32, width: u32, height: u32) -> Vec3 {
         let sx = 2.0 * fx / width as f32 - 1.0;
         let sy = 1.0 - 2.0 * fy / height as f32;
-        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
-        Ray { origin: self.position, dir }
+        self.forward + self.right * sx + self.up * sy
     }
 }
 
@@ -94,8 +100,7 @@ impl LightEdge {
     /// No control variate: every sample adds 0.
     pub const NONE: Self = Self { a00: 0.0, a01: 0.0, a11: 0.0, y0: Vec2::ZERO, share: 0.0, radiance: Vec3::ZERO };
 
-    /// The ellipse of the rays from `camera` that meet `light` (centre,
-    /// radius, radiance), across pixel (`x`, `y`) of a `width` x `height`
+    /// The ellipse of the rays from `camera` that meet `light`, across pixel (`x`, `y`) of a `width` x `height`
     /// image. With `z` the jitter less 1/2, the ray's direction `d(z)` is
     /// affine in `z`; it meets the sphere where its part across the unit
     /// vector `w` to the centre is at most `tan(a)` times its part along
@@ -107,11 +112,10 @@ impl LightEdge {
     /// nothing from inside) or the cone's section is no ellipse in front of
     /// the camera (a light beside or behind it).
     #[inline]
-    pub fn of_pixel(camera: &Camera, light: (Vec3, f32, Vec3), x: u32, y: u32, width: u32, height: u32) -> Self {
-        let (center, radius, radiance) = light;
-        let to_center = center - camera.position;
+    pub fn of_pixel(camera: &Camera, light: &SphereLight, x: u32, y: u32, width: u32, height: u32) -> Self {
+        let to_center = light.center - camera.position;
         let d2 = to_center.dot(to_center);
-        let r2 = radius * radius;
+        let r2 = light.radius * light.radius;
         // Written so that a NaN distance also gives no control variate.
         let outside = d2 > r2;
         if !outside {
@@ -121,9 +125,7 @@ impl LightEdge {
         let tan2 = r2 / (d2 - r2);
         let (u1, u2) = orthonormal_basis(w);
         // d(z) = dc + z.x da + z.y db; its part along w (l) and across (p).
-        let sx = 2.0 * (x as f32 + 0.5) / width as f32 - 1.0;
-        let sy = 1.0 - 2.0 * (y as f32 + 0.5) / height as f32;
-        let dc = camera.forward + camera.right * sx + camera.up * sy;
+        let dc = camera.direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
         let (da, db) = (camera.right * (2.0 / width as f32), camera.up * (-2.0 / height as f32));
         let across = |v: Vec3| Vec2::new(v.dot(u1), v.dot(u2));
         let (pc, pa, pb) = (across(dc), across(da), across(db));
@@ -161,7 +163,7 @@ impl LightEdge {
         } else {
             (area / (a00 * a11)).clamp(0.0, 1.0)
         };
-        Self { a00, a01, a11, y0, share, radiance }
+        Self { a00, a01, a11, y0, share, radiance: light.radiance }
     }
 
     /// The control variate's term for a sample jittered by `u` in [0, 1)^2:
@@ -275,15 +277,15 @@ mod tests {
 
     /// The default scene's camera at `size` x `size` pixels, and a light of
     /// `radius` at the default light's centre.
-    fn view(radius: f32) -> (Camera, (Vec3, f32, Vec3)) {
+    fn view(radius: f32) -> (Camera, SphereLight) {
         let camera = Camera::look_at(Vec3::new(0.0, 1.0, 3.4), Vec3::new(0.0, 1.0, 0.0), Vec3::Y, 40.0, 1.0);
-        (camera, (Vec3::new(0.0, 1.7, 0.0), radius, Vec3::splat(20.0)))
+        (camera, SphereLight::new(Vec3::new(0.0, 1.7, 0.0), radius, Vec3::splat(20.0)))
     }
 
     /// Whether the ray through film point (`fx`, `fy`) meets the light.
-    fn meets(camera: &Camera, light: (Vec3, f32, Vec3), fx: f32, fy: f32, size: u32) -> bool {
+    fn meets(camera: &Camera, light: &SphereLight, fx: f32, fy: f32, size: u32) -> bool {
         let ray = camera.ray(fx, fy, size, size);
-        crate::sphere::intersect_sphere(light.0, light.1, &ray, 0.0, f32::MAX) < f32::MAX
+        crate::sphere::intersect_sphere(light.center, light.radius, &ray, 0.0, f32::MAX) < f32::MAX
     }
 
     /// Case: every pixel of the default scene's light at 128 x 128 (an
@@ -301,15 +303,15 @@ mod tests {
             let mut crossed = 0;
             for y in 0..size {
                 for x in 0..size {
-                    let edge = LightEdge::of_pixel(&camera, light, x, y, size, size);
-                    assert_eq!(edge.radiance, light.2);
+                    let edge = LightEdge::of_pixel(&camera, &light, x, y, size, size);
+                    assert_eq!(edge.radiance, light.radiance);
                     let jitter =
                         |i: u32, j: u32, n: u32| Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
                     for i in 0..16 {
                         for j in 0..16 {
                             let u = jitter(i, j, 16);
                             let inside = edge.term(u).x < edge.radiance.x * edge.share;
-                            let hit = meets(&camera, light, x as f32 + u.x, y as f32 + u.y, size);
+                            let hit = meets(&camera, &light, x as f32 + u.x, y as f32 + u.y, size);
                             assert_eq!(inside, hit, "pixel ({x}, {y}) at {u}");
                         }
                     }
@@ -322,7 +324,7 @@ mod tests {
                     for i in 0..n {
                         for j in 0..n {
                             let u = jitter(i, j, n);
-                            hits += meets(&camera, light, x as f32 + u.x, y as f32 + u.y, size) as u32;
+                            hits += meets(&camera, &light, x as f32 + u.x, y as f32 + u.y, size) as u32;
                             mean += edge.term(u).x as f64;
                         }
                     }
@@ -347,12 +349,12 @@ mod tests {
     #[test]
     fn no_edge_from_inside_the_light_or_behind_the_camera() {
         let (camera, light) = view(0.15);
-        let inside = (camera.position + Vec3::new(0.0, 0.05, 0.0), 0.2, light.2);
-        assert_eq!(LightEdge::of_pixel(&camera, inside, 64, 64, 128, 128), LightEdge::NONE);
-        let behind = (camera.position + Vec3::new(0.0, 0.0, 1.0), 0.15, light.2);
+        let inside = SphereLight::new(camera.position + Vec3::new(0.0, 0.05, 0.0), 0.2, light.radiance);
+        assert_eq!(LightEdge::of_pixel(&camera, &inside, 64, 64, 128, 128), LightEdge::NONE);
+        let behind = SphereLight::new(camera.position + Vec3::new(0.0, 0.0, 1.0), 0.15, light.radiance);
         for (x, y) in [(0, 0), (64, 64), (127, 127)] {
-            assert_eq!(LightEdge::of_pixel(&camera, behind, x, y, 128, 128), LightEdge::NONE);
+            assert_eq!(LightEdge::of_pixel(&camera, &behind, x, y, 128, 128), LightEdge::NONE);
         }
-        assert_ne!(LightEdge::of_pixel(&camera, light, 64, 40, 128, 128), LightEdge::NONE);
+        assert_ne!(LightEdge::of_pixel(&camera, &light, 64, 40, 128, 128), LightEdge::NONE);
     }
 }

@@ -370,8 +370,7 @@ pub fn light_edge(x: u32, y: u32, params: &FrameParams) -> LightEdge {
     if params.flags & FLAG_LIGHT_EDGE == 0 {
         return LightEdge::NONE;
     }
-    let light = (params.light.center, params.light.radius, params.light.radiance);
-    LightEdge::of_pixel(&params.camera, light, x, y, params.width, params.height)
+    LightEdge::of_pixel(&params.camera, &params.light, x, y, params.width, params.height)
 }
 
 /// Whether integrator `flags` make connections through lit wall points

@@ -48,9 +48,10 @@ pub const FLAG_CONNECT: u32 = 256;
 pub const FLAG_NEE_CONTROL: u32 = 512;
 /// `flags` bit: camera samples take the control variate of the light's
 /// silhouette (`camera::LightEdge`): in pixels that the light's edge
-/// crosses, the box filter's integral of the step from the room to the
-/// light is known for a straight edge, and only the sliver between that
-/// line and the silhouette stays noisy.
+/// crosses, the share of the pixel inside the light's image (an ellipse on
+/// the film) is known exactly, and each sample adds the light's radiance
+/// times that share less its own indicator of the ellipse, so the step
+/// from the room to the light adds no noise where nothing hides it.
 pub const FLAG_LIGHT_EDGE: u32 = 1024;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above
