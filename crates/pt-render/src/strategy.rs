@@ -391,14 +391,7 @@ pub fn wall_share(scene: &Scene) -> f32 {
             let sin = (1.0 - cos * cos).max(0.0).sqrt();
             let phi = golden * i as f32;
             let ray = Ray { origin, dir: Vec3::new(sin * phi.cos(), cos, sin * phi.sin()) };
-            let mut hit = Hit::none(f32::INFINITY);
-            for (k, w) in scene.walls.iter().enumerate() {
-                hit.test_wall(k as u32, &w.wall, &ray);
-            }
-            for (k, sp) in scene.spheres.iter().enumerate() {
-                hit.test_sphere(k as u32, &sp.sphere, &ray);
-            }
-            hit.kind == HitKind::Wall
+            first_surface(scene, &ray).kind == HitKind::Wall
         })
         .count();
     walls_first as f32 / n as f32
@@ -457,24 +450,29 @@ pub fn silhouette_in_view(scene: &Scene) -> bool {
     if d2 <= light.radius * light.radius {
         return false;
     }
-    let axis = to_center / d2.sqrt();
-    let angle = (light.radius / d2.sqrt()).asin();
+    let dist = d2.sqrt();
+    let (axis, angle) = (to_center / dist, (light.radius / dist).asin());
     [0.8f32, 0.95, 0.995].iter().all(|&f| {
         (0..SILHOUETTE_AZIMUTHS).all(|k| {
             let (sin, cos) = (f * angle).sin_cos();
             let dir = pt_core::sampling::about_axis(axis, cos, sin, k as f32 / SILHOUETTE_AZIMUTHS as f32);
             let ray = Ray { origin, dir };
             let to_light = pt_core::sphere::intersect_sphere(light.center, light.radius, &ray, 0.0, f32::INFINITY);
-            let mut hit = Hit::none(f32::INFINITY);
-            for (i, w) in scene.walls.iter().enumerate() {
-                hit.test_wall(i as u32, &w.wall, &ray);
-            }
-            for (i, sp) in scene.spheres.iter().enumerate() {
-                hit.test_sphere(i as u32, &sp.sphere, &ray);
-            }
-            to_light < hit.t
+            to_light < first_surface(scene, &ray).t
         })
     })
+}
+
+/// The first wall or sphere of `scene` that `ray` meets (the light aside).
+fn first_surface(scene: &Scene, ray: &Ray) -> Hit {
+    let mut hit = Hit::none(f32::INFINITY);
+    for (i, w) in scene.walls.iter().enumerate() {
+        hit.test_wall(i as u32, &w.wall, ray);
+    }
+    for (i, sp) in scene.spheres.iter().enumerate() {
+        hit.test_sphere(i as u32, &sp.sphere, ray);
+    }
+    hit
 }
 
 /// [`default_flags`] before the light edge's control variate is left out
@@ -742,36 +740,27 @@ mod tests {
         // The low light: a third of its directions meet a sphere or leave
         // the room first; so for the held-out light between the spheres.
         let walled = |name: &str| !["light-low", "light-between-spheres"].contains(&name);
-        // Neither is far from every surface: both keep the glow lobe.
-        let open = |_: &str| false;
-        let mut seen = 0;
-        for sub in [dir.clone(), dir.join("holdout")] {
-            for entry in std::fs::read_dir(&sub).unwrap() {
-                let path = entry.unwrap().path();
-                if path.extension().is_some_and(|e| e == "toml") {
-                    let scene = Scene::load(&path).unwrap();
-                    assert!(connections_apply(&scene), "{}", path.display());
-                    let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-                    let beside = name == "light-corner";
-                    assert_eq!(hot_walls(&scene) >= CORNER_WALLS, beside, "{name}");
-                    let is_small = small.contains(&name.as_str());
-                    assert_eq!(light_extent(&scene) <= GLOW_MAX_EXTENT, is_small, "{name}");
-                    let glow = glow_flags(&scene);
-                    let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if beside { FLAG_GLOW } else { 0 };
-                    if is_small {
-                        assert_eq!(wall_share(&scene) >= CONNECT_MIN_WALL_SHARE, walled(&name), "{name}");
-                    }
-                    let connects = is_small && walled(&name);
-                    if is_small && !connects {
-                        assert_eq!(surface_clearance(&scene) > SMALL_OPEN_CLEARANCE, open(&name), "{name}");
-                    }
-                    let unconnected = if open(&name) { in_the_open() } else { glow };
-                    assert_eq!(default_flags(&scene), if connects { connected } else { unconnected }, "{name}");
-                    seen += 1;
-                }
+        let scenes = scene_files(&["", "holdout"]);
+        assert_eq!(scenes.len(), 18);
+        for (name, scene) in scenes {
+            assert!(connections_apply(&scene), "{name}");
+            let beside = name == "light-corner";
+            assert_eq!(hot_walls(&scene) >= CORNER_WALLS, beside, "{name}");
+            let is_small = small.contains(&name.as_str());
+            assert_eq!(light_extent(&scene) <= GLOW_MAX_EXTENT, is_small, "{name}");
+            let glow = glow_flags(&scene);
+            let connected = with_connections(glow) | FLAG_SOBOL_DEEP | if beside { FLAG_GLOW } else { 0 };
+            if is_small {
+                assert_eq!(wall_share(&scene) >= CONNECT_MIN_WALL_SHARE, walled(&name), "{name}");
             }
+            let connects = is_small && walled(&name);
+            if is_small && !connects {
+                // Neither unconnected small light is far from every
+                // surface: both keep the glow lobe.
+                assert!(surface_clearance(&scene) <= SMALL_OPEN_CLEARANCE, "{name}");
+            }
+            assert_eq!(default_flags(&scene), if connects { connected } else { glow }, "{name}");
         }
-        assert_eq!(seen, 18);
         // The light the open-clearance bound was measured on lies beyond
         // it, now with connections, and a wall share just above their bound.
         let front = Scene::load(&dir.join("holdout/light-front-mid.toml")).unwrap();
