@@ -257,7 +257,7 @@ pub fn time_to(curve: &[(f64, f64)], target: f64) -> Option<f64> {
 }
 
 /// The seeds a strategy was rendered with on `backend`, in order.
-fn seeds(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<u32> {
+pub(crate) fn seeds(points: &[Point], backend: &BenchBackend, strategy: &str) -> Vec<u32> {
     let mut seeds: Vec<u32> =
         points.iter().filter(|p| p.backend == *backend && p.strategy == strategy).map(|p| p.seed).collect();
     seeds.sort_unstable();
