@@ -113,6 +113,11 @@ struct BenchArgs {
     /// Folder of `<scene>.csv` files from `compare.py --suite` to include.
     #[arg(long, requires = "suite")]
     mitsuba_dir: Option<PathBuf>,
+    /// Measure nothing: rebuild the suite's tables, plot and report from
+    /// the points of an earlier run (OUT_DIR/suite.csv, with the same
+    /// --seeds).
+    #[arg(long, requires = "suite", conflicts_with = "reference_only")]
+    from_csv: bool,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]

@@ -15,7 +15,7 @@ use pt_render::gpu::GpuContext;
 use pt_render::{CpuRenderer, Device, RenderSettings, Scene, metrics, output};
 
 use super::convergence::{Point, Until, curve, means, seeds as seeds_of, time_to, times_by_seed, warm_up};
-use super::{BenchBackend, STRATEGIES, StrategyId, median_min_max};
+use super::{BackendKind, BenchBackend, STRATEGIES, StrategyId, median_min_max};
 
 /// One scene of the suite.
 pub struct SuiteScene {
@@ -686,9 +686,90 @@ pub fn write_suite_csv(path: &Path, runs: &[SceneRun<'_>]) -> Result<()> {
     std::fs::write(path, s).with_context(|| format!("{}: cannot write the CSV", path.display()))
 }
 
+/// Reads a CSV that [`write_suite_csv`] wrote: every point, by scene, in
+/// the file's order. MAPE and RMSE are not in the file and read as 0; the
+/// suite's tables use neither.
+pub fn read_suite_csv(path: &Path) -> Result<Vec<(String, Point)>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let at = || format!("{}:{}", path.display(), i + 1);
+        let f = csv_fields(line);
+        if f.len() != 7 {
+            bail!("{}: expected scene,backend,strategy,seed,spp,time_s,rel_mse", at());
+        }
+        let backend = match f[1].split_once(": ") {
+            Some(("GPU", d)) => BenchBackend::gpu(d),
+            Some(("CPU", d)) => BenchBackend { kind: BackendKind::Cpu, detail: d.to_string() },
+            _ => bail!("{}: backend {:?} is neither \"GPU: ...\" nor \"CPU: ...\"", at(), f[1]),
+        };
+        let point = Point {
+            backend,
+            strategy: f[2].clone(),
+            seed: f[3].parse().with_context(|| format!("{}: seed", at()))?,
+            spp: f[4].parse().with_context(|| format!("{}: spp", at()))?,
+            time: f[5].parse().with_context(|| format!("{}: time_s", at()))?,
+            rel_mse: f[6].parse().with_context(|| format!("{}: rel_mse", at()))?,
+            mape: 0.0,
+            rmse: 0.0,
+        };
+        out.push((f[0].clone(), point));
+    }
+    Ok(out)
+}
+
+/// The fields of one CSV line: commas inside double quotes do not split,
+/// and the quotes are dropped (the strategies' names hold commas but no
+/// quotes).
+fn csv_fields(line: &str) -> Vec<String> {
+    let mut fields = vec![String::new()];
+    let mut quoted = false;
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => fields.push(String::new()),
+            c => fields.last_mut().expect("never empty").push(c),
+        }
+    }
+    fields
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `write_suite_csv` writes, `read_suite_csv` reads back: every
+    /// field, a strategy name with commas and a colon in it included.
+    #[test]
+    fn the_suite_csv_reads_back_what_was_written() {
+        let scenes = load_suite(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes"))).unwrap();
+        let gpu = BenchBackend::gpu("llvmpipe (LLVM 15.0.6, 256 bits)");
+        let cpu = BenchBackend { kind: BackendKind::Cpu, detail: "2 threads".into() };
+        let points = vec![
+            point(STRATEGIES[0].name, &gpu, 100, 64, 0.084092, 9.315918e-4),
+            point(STRATEGIES[5].name, &cpu, 201, 4, 0.007018, 2.873919e-2),
+        ];
+        let run = SceneRun {
+            scene: &scenes[0],
+            settings: suite_settings(&scenes[0], 128, 128),
+            reference_rel_mse: 0.0,
+            points: points.clone(),
+            mitsuba: None,
+        };
+        let dir = std::env::temp_dir().join(format!("pt-suite-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("suite.csv");
+        write_suite_csv(&path, &[run]).unwrap();
+        let back = read_suite_csv(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(STRATEGIES[0].name.contains(", ") && STRATEGIES[0].name.contains(": "));
+        assert_eq!(back.len(), 2);
+        for ((scene, p), q) in back.iter().zip(&points) {
+            assert_eq!(scene, &scenes[0].name);
+            assert_eq!((&p.backend, &p.strategy, p.seed, p.spp), (&q.backend, &q.strategy, q.seed, q.spp));
+            assert_eq!((p.time, p.rel_mse), (q.time, q.rel_mse));
+        }
+    }
 
     fn point(strategy: &str, backend: &BenchBackend, seed: u32, spp: u32, time: f64, rel_mse: f64) -> Point {
         Point { backend: backend.clone(), strategy: strategy.into(), seed, spp, time, rel_mse, mape: 0.0, rmse: 0.0 }

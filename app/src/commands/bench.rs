@@ -12,6 +12,8 @@ use crate::{BenchArgs, BenchWhat, SuiteBackends};
 /// Runs the benchmarks asked for and writes the report when asked.
 pub(crate) fn run(args: &BenchArgs) -> Result<()> {
     let ctx = match args.backend {
+        // A report rebuilt from an earlier run's points renders nothing.
+        _ if args.from_csv => None,
         SuiteBackends::Cpu => None,
         _ => Some(pt_render::GpuContext::new().context("the GPU benchmark needs a Vulkan adapter")?),
     };

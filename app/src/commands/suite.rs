@@ -10,8 +10,8 @@ use super::spp_progress_bar;
 use crate::BenchArgs;
 use crate::bench::relative_to_report;
 use crate::bench::suite::{
-    SceneRun, cached_reference, load_suite, plot_suite, read_mitsuba, scene_curves, scene_markdown, suite_markdown,
-    suite_settings, write_suite_csv,
+    SceneRun, cached_reference, load_suite, plot_suite, read_mitsuba, read_suite_csv, scene_curves, scene_markdown,
+    suite_markdown, suite_settings, write_suite_csv,
 };
 use crate::bench::{BackendKind, BenchBackend, backends_of};
 
@@ -71,11 +71,24 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
         return Ok(());
     }
 
+    let csv = args.out_dir.join("suite.csv");
+    let mut earlier = if args.from_csv { Some(read_suite_csv(&csv)?) } else { None };
     let mut runs = Vec::new();
     for (s, (settings, r)) in suite.iter().zip(references) {
-        let points = scene_curves(gpu, cpu, &s.scene, &settings, args.max_spp, args.seeds, TARGET, &r, |m| {
-            eprintln!("{}: {m}", s.name)
-        })?;
+        let points = match &mut earlier {
+            Some(all) => {
+                let (mine, rest) = std::mem::take(all).into_iter().partition(|(name, _)| *name == s.name);
+                *all = rest;
+                let mine: Vec<_> = mine.into_iter().map(|(_, p)| p).collect();
+                if mine.is_empty() {
+                    bail!("{}: no points of scene {}", csv.display(), s.name);
+                }
+                mine
+            }
+            None => scene_curves(gpu, cpu, &s.scene, &settings, args.max_spp, args.seeds, TARGET, &r, |m| {
+                eprintln!("{}: {m}", s.name)
+            })?,
+        };
         let mitsuba = match &args.mitsuba_dir {
             Some(d) => Some(read_mitsuba(&d.join(format!("{}.csv", s.name)), r.rel_mse)?),
             None => None,
@@ -93,8 +106,9 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
     if backends.is_empty() {
         bail!("no backend measured");
     }
-    let csv = args.out_dir.join("suite.csv");
-    write_suite_csv(&csv, &runs)?;
+    if !args.from_csv {
+        write_suite_csv(&csv, &runs)?;
+    }
     let png = args.out_dir.join("suite.png");
     plot_suite(&png, &runs, &backends, args.seeds, TARGET)?;
     let body = suite_markdown(
