@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use pt_render::gpu::GpuContext;
 
-use super::spp_progress_bar;
+use super::{machine_description, spp_progress_bar};
 use crate::BenchArgs;
 use crate::bench::relative_to_report;
 use crate::bench::suite::{
@@ -106,19 +106,31 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
     if backends.is_empty() {
         bail!("no backend measured");
     }
-    if !args.from_csv {
+    // The machine that measured the points: this one, or for a report
+    // rebuilt from them, the one its run recorded.
+    let machine_file = args.out_dir.join("suite.machine");
+    let machine = if args.from_csv {
+        std::fs::read_to_string(&machine_file).map_or_else(|_| "not recorded".into(), |s| s.trim().to_string())
+    } else {
         write_suite_csv(&csv, &runs)?;
-    }
+        let m = machine_description();
+        std::fs::write(&machine_file, format!("{m}\n"))
+            .with_context(|| format!("{}: cannot write", machine_file.display()))?;
+        m
+    };
     let png = args.out_dir.join("suite.png");
     plot_suite(&png, &runs, &backends, args.seeds, TARGET)?;
-    let body = suite_markdown(
-        &runs,
-        &backends,
-        args.seeds,
-        TARGET,
-        args.suite_dir.to_string_lossy().trim_end_matches('/'),
-        &relative_to_report(&png, args.report.as_deref()),
-        &relative_to_report(&csv, args.report.as_deref()),
+    let body = format!(
+        "Machine: {machine}.\n\n{}",
+        suite_markdown(
+            &runs,
+            &backends,
+            args.seeds,
+            TARGET,
+            args.suite_dir.to_string_lossy().trim_end_matches('/'),
+            &relative_to_report(&png, args.report.as_deref()),
+            &relative_to_report(&csv, args.report.as_deref()),
+        )
     );
     println!("{body}");
     if let Some(path) = &args.report {
