@@ -7,6 +7,10 @@
 #   scripts/performance_report.sh suite    the scene suite only
 #   scripts/performance_report.sh holdout  the held-out scenes only
 #   scripts/performance_report.sh probe    the probe scenes only
+#   scripts/performance_report.sh rebuild  the three suites' sections again
+#                                          from their runs' points, measuring
+#                                          nothing (after a change to the
+#                                          report's tables)
 #
 # SEEDS (default 5) sets the seeds of every measurement, ours and Mitsuba's.
 set -euo pipefail
@@ -26,6 +30,16 @@ agreement() {
         "$bin" compare "$2/$name.exr" --reference "$reference" --max-t 5 | tail -n 1
     done
 }
+
+if [ "${1:-all}" = rebuild ]; then
+    "$bin" bench convergence --suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out" \
+        --seeds "$seeds" --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md --from-csv
+    for which in holdout probe; do
+        "$bin" bench convergence --suite --suite-dir "scenes/$which" --width 128 --height 128 --reference-spp 8192 \
+            --out-dir "$out/$which" --seeds "$seeds" --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md" --from-csv
+    done
+    exit 0
+fi
 
 if [ "${1:-all}" = holdout ] || [ "${1:-all}" = probe ]; then
     # The held-out scenes (scenes/holdout/) or the probe scenes
