@@ -181,6 +181,9 @@ impl Session {
             // camera at its look-at point): keep the last good scene.
             self.settings.scene = self.applied.scene.clone();
         }
+        if self.settings.scene != self.applied.scene {
+            self.settings.follow_edge_rule();
+        }
         self.finish_in_flight();
         self.apply_settings(ctx, actions.reset_accumulation)?;
         self.trace(ctx)?;

@@ -2,7 +2,8 @@
 //! change invalidates the accumulated image.
 
 use pt_core::FrameParams;
-use pt_core::params::TONEMAP_ACES;
+use pt_core::params::{FLAG_LIGHT_EDGE, TONEMAP_ACES};
+use pt_render::strategy::silhouette_in_view;
 use pt_render::{RenderSettings, Scene};
 
 /// How many samples each frame traces.
@@ -78,6 +79,18 @@ impl ViewSettings {
         }
     }
 
+    /// Sets the light edge's control variate (`FLAG_LIGHT_EDGE`) as the
+    /// scene's default strategy would for the current camera: on where the
+    /// camera sees the whole rim of the light, off where a wall or a sphere
+    /// hides part of it (`strategy::silhouette_in_view`; its samples would
+    /// then carry a step the image does not have). The panel has no switch
+    /// for it, so it follows every move of the camera and every edit of
+    /// the scene; the other flags stay as they are.
+    pub fn follow_edge_rule(&mut self) {
+        self.flags =
+            if silhouette_in_view(&self.scene) { self.flags | FLAG_LIGHT_EDGE } else { self.flags & !FLAG_LIGHT_EDGE };
+    }
+
     fn expected_image(&self) -> ExpectedImage<'_> {
         ExpectedImage { scene: &self.scene, width: self.width, height: self.height, max_bounces: self.max_bounces }
     }
@@ -110,6 +123,7 @@ mod tests {
     use super::*;
     use pt_core::glam::Vec3;
     use pt_core::params::{FLAG_NEE, TONEMAP_CLAMP};
+    use std::path::Path;
 
     fn base() -> ViewSettings {
         ViewSettings::new(Scene::default_scene(), 320, 240)
@@ -166,6 +180,28 @@ mod tests {
         assert!(!resets(|s| s.samples_per_frame = SamplesPerFrame::Fixed(16)));
         assert!(!resets(|s| s.target_spp = 1024));
         assert!(!resets(|s| s.paused = true));
+    }
+
+    /// Around the probe whose large sphere hides part of the light's rim
+    /// from the scene's camera, the edge's control variate is off; seen
+    /// from above the light, with the whole rim in view, on; back at the
+    /// scene's camera, off again. No other flag moves.
+    #[test]
+    fn the_light_edge_follows_the_camera() {
+        let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/probe/low-medium.toml"));
+        let scene = Scene::load(path).unwrap();
+        let mut s = ViewSettings::new(scene, 64, 64);
+        let others = s.flags & !FLAG_LIGHT_EDGE;
+        assert_eq!(s.flags & FLAG_LIGHT_EDGE, 0);
+        let camera = s.scene.camera;
+        s.scene.camera.position = s.scene.light.center + Vec3::new(0.0, 1.0, 0.6);
+        s.scene.camera.look_at = s.scene.light.center;
+        assert!(silhouette_in_view(&s.scene));
+        s.follow_edge_rule();
+        assert_eq!(s.flags, others | FLAG_LIGHT_EDGE);
+        s.scene.camera = camera;
+        s.follow_edge_rule();
+        assert_eq!(s.flags, others);
     }
 
     #[test]
