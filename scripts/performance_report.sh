@@ -31,28 +31,43 @@ agreement() {
     done
 }
 
-if [ "${1:-all}" = rebuild ]; then
-    "$bin" bench convergence --suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out" \
-        --seeds "$seeds" --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md --from-csv
-    for which in holdout probe; do
-        "$bin" bench convergence --suite --suite-dir "scenes/$which" --width 128 --height 128 --reference-spp 8192 \
-            --out-dir "$out/$which" --seeds "$seeds" --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md" --from-csv
-    done
-    exit 0
-fi
+# One suite's bench arguments, its folder, Mitsuba's folder and its report:
+# the scene suite (scenes/, docs/PERFORMANCE.md) for "", else the held-out
+# scenes (scenes/holdout/) or the probes (scenes/probe/) in their own
+# report, docs/bench/holdout.md or docs/bench/probe.md.
+suite_of() {
+    if [ -z "$1" ]; then
+        dir=$out mitsuba=$out/mitsuba-suite report=docs/PERFORMANCE.md
+        args=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$dir")
+    else
+        dir=$out/$1 mitsuba=$out/$1/mitsuba report=$out/$1.md
+        args=(--suite --suite-dir "scenes/$1" --width 128 --height 128 --reference-spp 8192 --out-dir "$dir")
+    fi
+}
 
-if [ "${1:-all}" = holdout ] || [ "${1:-all}" = probe ]; then
-    # The held-out scenes (scenes/holdout/) or the probe scenes
-    # (scenes/probe/): the same measurements as the suite's, in their own
-    # report, docs/bench/holdout.md or docs/bench/probe.md.
-    which=$1
-    hold=(--suite --suite-dir "scenes/$which" --width 128 --height 128 --reference-spp 8192 --out-dir "$out/$which")
-    "$bin" bench convergence "${hold[@]}" --reference-only
-    python3 scripts/mitsuba/compare.py --suite "$out/$which/suite.tsv" "$out/$which/mitsuba" --seeds "$seeds"
-    "$bin" bench convergence "${hold[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$out/$which/mitsuba" --report "$out/$which.md"
-    agreement "$out/$which/suite.tsv" "$out/$which/mitsuba"
-    exit 0
-fi
+# References rendered once and cached by scene hash under the suite's
+# folder, Mitsuba's four samplers, then ours.
+measure_suite() {
+    suite_of "$1"
+    "$bin" bench convergence "${args[@]}" --reference-only
+    python3 scripts/mitsuba/compare.py --suite "$dir/suite.tsv" "$mitsuba" --seeds "$seeds"
+    "$bin" bench convergence "${args[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$mitsuba" --report "$report"
+    agreement "$dir/suite.tsv" "$mitsuba"
+}
+
+case "${1:-all}" in
+    rebuild)
+        for which in "" holdout probe; do
+            suite_of "$which"
+            "$bin" bench convergence "${args[@]}" --mitsuba-dir "$mitsuba" --report "$report" --from-csv
+        done
+        exit 0
+        ;;
+    holdout | probe)
+        measure_suite "$1"
+        exit 0
+        ;;
+esac
 
 if [ "${1:-all}" != suite ]; then
     # 1. The reference (our CPU renderer, 100x the largest budget).
@@ -63,10 +78,5 @@ if [ "${1:-all}" != suite ]; then
     "$bin" bench all --seeds "$seeds" --reference "$out/reference.exr" --mitsuba-csv "$out/mitsuba.csv" --out-dir "$out" --report docs/PERFORMANCE.md
 fi
 
-# The scene suite (scenes/): references rendered once and cached by scene
-# hash under docs/bench/references, Mitsuba's four samplers, then ours.
-suite=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$out")
-"$bin" bench convergence "${suite[@]}" --reference-only
-python3 scripts/mitsuba/compare.py --suite "$out/suite.tsv" "$out/mitsuba-suite" --seeds "$seeds"
-"$bin" bench convergence "${suite[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$out/mitsuba-suite" --report docs/PERFORMANCE.md
-agreement "$out/suite.tsv" "$out/mitsuba-suite"
+# The scene suite.
+measure_suite ""

@@ -114,7 +114,7 @@ struct BenchArgs {
     #[arg(long, requires = "suite")]
     mitsuba_dir: Option<PathBuf>,
     /// Measure nothing: rebuild the suite's tables, plot and report from
-    /// the points of an earlier run (OUT_DIR/suite.csv, with the same
+    /// the points of an earlier run (OUT_DIR/suite.csv; its seeds, not
     /// --seeds).
     #[arg(long, requires = "suite", conflicts_with = "reference_only")]
     from_csv: bool,

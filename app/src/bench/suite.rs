@@ -718,6 +718,14 @@ pub fn read_suite_csv(path: &Path) -> Result<Vec<(String, Point)>> {
     Ok(out)
 }
 
+/// How many screening seeds (below [`CONFIRM_SEED`]) `points` hold.
+pub fn screening_seeds<'a>(points: impl Iterator<Item = &'a Point>) -> u32 {
+    let mut seeds: Vec<u32> = points.map(|p| p.seed).filter(|&s| s < CONFIRM_SEED).collect();
+    seeds.sort_unstable();
+    seeds.dedup();
+    seeds.len() as u32
+}
+
 /// The fields of one CSV line: commas inside double quotes do not split,
 /// and the quotes are dropped (the strategies' names hold commas but no
 /// quotes).
@@ -764,6 +772,8 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert!(STRATEGIES[0].name.contains(", ") && STRATEGIES[0].name.contains(": "));
         assert_eq!(back.len(), 2);
+        // Seed 100 screens, 201 confirms.
+        assert_eq!(screening_seeds(back.iter().map(|(_, p)| p)), 1);
         for ((scene, p), q) in back.iter().zip(&points) {
             assert_eq!(scene, &scenes[0].name);
             assert_eq!((&p.backend, &p.strategy, p.seed, p.spp), (&q.backend, &q.strategy, q.seed, q.spp));

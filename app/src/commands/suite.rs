@@ -11,7 +11,7 @@ use crate::BenchArgs;
 use crate::bench::relative_to_report;
 use crate::bench::suite::{
     SceneRun, cached_reference, load_suite, plot_suite, read_mitsuba, read_suite_csv, scene_curves, scene_markdown,
-    suite_markdown, suite_settings, write_suite_csv,
+    screening_seeds, suite_markdown, suite_settings, write_suite_csv,
 };
 use crate::bench::{BackendKind, BenchBackend, backends_of};
 
@@ -72,20 +72,20 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
     }
 
     let csv = args.out_dir.join("suite.csv");
-    let mut earlier = if args.from_csv { Some(read_suite_csv(&csv)?) } else { None };
+    let earlier = if args.from_csv { Some(read_suite_csv(&csv)?) } else { None };
+    // A report rebuilt from a run has that run's seeds, whatever --seeds says.
+    let seeds = earlier.as_ref().map_or(args.seeds, |all| screening_seeds(all.iter().map(|(_, p)| p)));
     let mut runs = Vec::new();
     for (s, (settings, r)) in suite.iter().zip(references) {
-        let points = match &mut earlier {
+        let points = match &earlier {
             Some(all) => {
-                let (mine, rest) = std::mem::take(all).into_iter().partition(|(name, _)| *name == s.name);
-                *all = rest;
-                let mine: Vec<_> = mine.into_iter().map(|(_, p)| p).collect();
+                let mine: Vec<_> = all.iter().filter(|(name, _)| *name == s.name).map(|(_, p)| p.clone()).collect();
                 if mine.is_empty() {
                     bail!("{}: no points of scene {}", csv.display(), s.name);
                 }
                 mine
             }
-            None => scene_curves(gpu, cpu, &s.scene, &settings, args.max_spp, args.seeds, TARGET, &r, |m| {
+            None => scene_curves(gpu, cpu, &s.scene, &settings, args.max_spp, seeds, TARGET, &r, |m| {
                 eprintln!("{}: {m}", s.name)
             })?,
         };
@@ -94,7 +94,7 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
             None => None,
         };
         let backends = backends_of(&points);
-        println!("\n{} ({})\n{}", s.name, s.stresses, scene_markdown(&points, &backends, args.seeds, TARGET));
+        println!("\n{} ({})\n{}", s.name, s.stresses, scene_markdown(&points, &backends, seeds, TARGET));
         runs.push(SceneRun { scene: s, settings, reference_rel_mse: r.rel_mse, points, mitsuba });
     }
     let backends: Vec<BenchBackend> = {
@@ -119,13 +119,13 @@ pub(crate) fn run(args: &BenchArgs, gpu: Option<&GpuContext>, cpu: bool) -> Resu
         m
     };
     let png = args.out_dir.join("suite.png");
-    plot_suite(&png, &runs, &backends, args.seeds, TARGET)?;
+    plot_suite(&png, &runs, &backends, seeds, TARGET)?;
     let body = format!(
         "Machine: {machine}.\n\n{}",
         suite_markdown(
             &runs,
             &backends,
-            args.seeds,
+            seeds,
             TARGET,
             args.suite_dir.to_string_lossy().trim_end_matches('/'),
             &relative_to_report(&png, args.report.as_deref()),

@@ -453,8 +453,8 @@ pub fn silhouette_in_view(scene: &Scene) -> bool {
     let dist = d2.sqrt();
     let (axis, angle) = (to_center / dist, (light.radius / dist).asin());
     [0.8f32, 0.95, 0.995].iter().all(|&f| {
+        let (sin, cos) = (f * angle).sin_cos();
         (0..SILHOUETTE_AZIMUTHS).all(|k| {
-            let (sin, cos) = (f * angle).sin_cos();
             let dir = pt_core::sampling::about_axis(axis, cos, sin, k as f32 / SILHOUETTE_AZIMUTHS as f32);
             let ray = Ray { origin, dir };
             let to_light = pt_core::sphere::intersect_sphere(light.center, light.radius, &ray, 0.0, f32::INFINITY);

@@ -175,13 +175,15 @@ impl Session {
         if actions.reset_view {
             self.settings.scene.camera = self.initial_camera;
         }
-        // Only edited scenes need the check (it writes and re-reads TOML).
-        if self.settings.scene != self.applied.scene && self.settings.scene.validate().is_err() {
-            // A value the panel allowed but the kernel cannot trace (e.g. a
-            // camera at its look-at point): keep the last good scene.
-            self.settings.scene = self.applied.scene.clone();
-        }
+        // Only a moved camera or an edited scene needs the check (it writes
+        // and re-reads TOML) and the light edge's rule.
         if self.settings.scene != self.applied.scene {
+            if self.settings.scene.validate().is_err() {
+                // A value the panel allowed but the kernel cannot trace
+                // (e.g. a camera at its look-at point): keep the last good
+                // scene.
+                self.settings.scene = self.applied.scene.clone();
+            }
             self.settings.follow_edge_rule();
         }
         self.finish_in_flight();
