@@ -7,7 +7,8 @@
 #   scripts/performance_report.sh suite    the scene suite only
 #   scripts/performance_report.sh holdout  the held-out scenes only
 #   scripts/performance_report.sh probe    the probe scenes only
-#   scripts/performance_report.sh rebuild  the three suites' sections again
+#   scripts/performance_report.sh spheres  the scenes with more spheres only
+#   scripts/performance_report.sh rebuild  the four suites' sections again
 #                                          from their runs' points, measuring
 #                                          nothing (after a change to the
 #                                          report's tables)
@@ -33,8 +34,8 @@ agreement() {
 
 # One suite's bench arguments, its folder, Mitsuba's folder and its report:
 # the scene suite (scenes/, docs/PERFORMANCE.md) for "", else the held-out
-# scenes (scenes/holdout/) or the probes (scenes/probe/) in their own
-# report, docs/bench/holdout.md or docs/bench/probe.md.
+# scenes (scenes/holdout/), the probes (scenes/probe/) or the scenes with
+# more spheres (scenes/spheres/) in their own report, docs/bench/NAME.md.
 suite_of() {
     if [ -z "$1" ]; then
         dir=$out mitsuba=$out/mitsuba-suite report=docs/PERFORMANCE.md
@@ -57,13 +58,13 @@ measure_suite() {
 
 case "${1:-all}" in
     rebuild)
-        for which in "" holdout probe; do
+        for which in "" holdout probe spheres; do
             suite_of "$which"
             "$bin" bench convergence "${args[@]}" --mitsuba-dir "$mitsuba" --report "$report" --from-csv
         done
         exit 0
         ;;
-    holdout | probe)
+    holdout | probe | spheres)
         measure_suite "$1"
         exit 0
         ;;

@@ -185,12 +185,42 @@ fn set_geometry_renders_the_new_scene() {
     assert_ne!(means(&got), means(&render_gpu(&ctx, &before, &settings, 8, 7)));
 }
 
-/// The default scene with a third sphere: the larger small-scene capacity.
-fn three_spheres() -> Scene {
+/// The default scene with six more spheres, hung where nothing else is:
+/// the box capacity with eight spheres; with `box_order` false, the side
+/// walls first, which takes the capacity of eight walls of any direction.
+fn eight_spheres(box_order: bool) -> Scene {
     let mut scene = Scene::default_scene();
-    let sphere = pt_core::Sphere::new(Vec3::new(0.3, 1.2, -0.5), 0.2, Vec3::new(0.9, 0.6, 0.1));
-    scene.spheres.push(pt_render::scene::NamedSphere { name: "third".into(), sphere });
+    let spots = [
+        (Vec3::new(0.3, 1.2, -0.5), 0.2),
+        (Vec3::new(-0.6, 1.3, 0.4), 0.15),
+        (Vec3::new(0.7, 0.9, 0.6), 0.12),
+        (Vec3::new(-0.1, 0.9, -0.8), 0.15),
+        (Vec3::new(-0.7, 1.7, -0.7), 0.15),
+        (Vec3::new(0.0, 0.2, 0.75), 0.15),
+    ];
+    for (k, (center, radius)) in spots.into_iter().enumerate() {
+        let sphere = pt_core::Sphere::new(center, radius, Vec3::new(0.9, 0.1 + 0.1 * k as f32, 0.1));
+        scene.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
+    }
+    if !box_order {
+        scene.walls.swap(0, 3);
+    }
     scene
+}
+
+/// The scenes the small-scene tests run, one per capacity, each checked
+/// to take it: the default scene, and `eight_spheres` in both wall orders.
+fn one_scene_per_capacity() -> Vec<Scene> {
+    use pt_core::small_scene::{SMALL_SCENE_SIZES, smallest_fit};
+    let scenes = vec![Scene::default_scene(), eight_spheres(true), eight_spheres(false)];
+    for (i, scene) in scenes.iter().enumerate() {
+        let settings = RenderSettings { width: 8, height: 8, ..scene.render };
+        let geometry = scene.geometry().unwrap();
+        let fit = smallest_fit(&scene.frame_params(&settings, 1, 0), &geometry);
+        assert_eq!(fit, Some(i), "scene {i} takes capacity {:?}", SMALL_SCENE_SIZES[i]);
+    }
+    assert_eq!(scenes.len(), SMALL_SCENE_SIZES.len());
+    scenes
 }
 
 /// A frame of `scene` with the trace kernel `kernel`.
@@ -219,9 +249,8 @@ fn render_with_flags(
 /// each with each of the three samplers compiled in, with and without the connections' code and
 /// the glow lobe's, render what the general kernel renders with the same
 /// flags, seed for seed: the same tests in the same order on
-/// a copy of the same numbers. The default scene runs on the 5-wall,
-/// 2-sphere kernel, the scene with a third sphere on the 8-wall, 4-sphere
-/// one. On lavapipe that is bit for bit; another driver may fuse
+/// a copy of the same numbers, on each capacity
+/// (`one_scene_per_capacity`). On lavapipe that is bit for bit; another driver may fuse
 /// multiply-adds differently in each, so elsewhere all but a few pixels
 /// (paths that diverge) must agree to 1e-4. The three samplers' images
 /// differ, and so do those with connections and those without the glow
@@ -230,11 +259,10 @@ fn render_with_flags(
 fn small_scene_kernels_render_what_the_general_kernel_renders() {
     use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_SOBOL, FLAG_SOBOL_DEEP, FLAGS_DEFAULT};
     let ctx = gpu();
-    let three_spheres = three_spheres();
     let samplers = [FLAGS_DEFAULT & !FLAG_SOBOL, FLAGS_DEFAULT, FLAGS_DEFAULT | FLAG_SOBOL_DEEP];
     let connected = |flags: u32| (flags & !FLAG_GLOW) | FLAG_CONNECT;
     let all = samplers.into_iter().flat_map(|f| [f, connected(f), f & !FLAG_GLOW]);
-    for scene in [Scene::default_scene(), three_spheres] {
+    for scene in one_scene_per_capacity() {
         let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
         for flags in all.clone() {
             let (used, general) = render_with_flags(&ctx, &scene, TraceKernel::General, flags);
@@ -279,7 +307,7 @@ fn close_per_mille(a: &[[f32; 3]], b: &[[f32; 3]], tolerance: f32) -> usize {
     close.count() * 1000 / b.len()
 }
 
-/// The small-scene kernels with the scene compiled in (both capacities,
+/// The small-scene kernels with the scene compiled in (each capacity,
 /// with and without the connections' code) render the samples of the
 /// unspecialized ones: the same arithmetic on the same values, which the
 /// driver may now fold and fuse differently, so every pixel but a few
@@ -289,9 +317,8 @@ fn close_per_mille(a: &[[f32; 3]], b: &[[f32; 3]], tolerance: f32) -> usize {
 fn specialized_kernels_render_what_the_small_scene_kernels_render() {
     use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAGS_DEFAULT};
     let ctx = gpu();
-    let three_spheres = three_spheres();
     let connected = (FLAGS_DEFAULT & !FLAG_GLOW) | FLAG_CONNECT;
-    for scene in [Scene::default_scene(), three_spheres] {
+    for scene in one_scene_per_capacity() {
         let mut images: Vec<Vec<[f32; 3]>> = Vec::new();
         for flags in [FLAGS_DEFAULT, connected] {
             let (used, small) = render_with_flags(&ctx, &scene, TraceKernel::SmallScene, flags);
@@ -345,21 +372,22 @@ fn a_specialized_renderer_follows_a_changed_scene() {
     assert!(close_per_mille(&changed, &first, 1e-4) < 500, "the change shows");
 }
 
-/// A scene the small-scene kernel cannot render exactly (a fifth sphere, or
-/// a panel that can shadow the light) runs on the general kernel even where
-/// the small one is chosen, and renders what the general kernel renders.
+/// A scene the small-scene kernel cannot render exactly (a ninth sphere,
+/// or a panel that can shadow the light) runs on the general kernel even
+/// where the small one is chosen, and renders what the general kernel
+/// renders.
 #[test]
 fn scenes_that_do_not_fit_run_on_the_general_kernel() {
     let ctx = gpu();
-    let mut five_spheres = Scene::default_scene();
-    for k in 0..3 {
-        let sphere = pt_core::Sphere::new(Vec3::new(-0.6 + 0.4 * k as f32, 1.2, 0.6), 0.1, Vec3::splat(0.5));
-        five_spheres.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
+    let mut nine_spheres = Scene::default_scene();
+    for k in 0..7 {
+        let sphere = pt_core::Sphere::new(Vec3::new(-0.75 + 0.25 * k as f32, 1.2, 0.6), 0.08, Vec3::splat(0.5));
+        nine_spheres.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
     }
     let mut panel = Scene::default_scene();
     let wall = pt_core::Wall::new(Vec3::new(-0.5, 1.0, -0.5), Vec3::X, Vec3::new(0.0, 0.2, 0.6), Vec3::splat(0.5));
     panel.walls.push(pt_render::scene::NamedWall { name: "panel".into(), wall });
-    for scene in [five_spheres, panel] {
+    for scene in [nine_spheres, panel] {
         let (used, fallback) = render_with(&ctx, &scene, TraceKernel::SmallScene);
         assert_eq!(used, TraceKernel::General);
         assert_eq!(fallback, render_with(&ctx, &scene, TraceKernel::General).1);

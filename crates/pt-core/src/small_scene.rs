@@ -47,9 +47,16 @@ use spirv_std::glam::Vec3;
 
 /// The capacities (walls, spheres besides the light) the kernel has a
 /// small-scene entry point for, smallest first: a box room's five walls
-/// ([`BOX_AXES`]: the default scene's) and two spheres, and any closed
-/// room with two walls and two spheres to spare.
-pub const SMALL_SCENE_SIZES: [(u32, u32); 2] = [(5, 2), (8, 4)];
+/// ([`BOX_AXES`]: the default scene's) with two spheres, the same box with
+/// up to eight, and any closed room of up to eight walls and eight spheres.
+///
+/// Why more than one: where the scene is not compiled into the pipeline
+/// (the viewer, whose scene is edited), every slot past the scene's count
+/// still costs its masked test, 2 to 3% of the time each; where it is
+/// compiled in, the driver drops those slots. Why eight spheres: a scene
+/// that fits no capacity takes the general loops, which lavapipe runs
+/// several times slower (docs/ARCHITECTURE.md has the figures).
+pub const SMALL_SCENE_SIZES: [(u32, u32); 3] = [(5, 2), (5, 8), (8, 8)];
 
 /// The axis of the normal (0 x, 1 y, 2 z) of each wall slot of the box
 /// capacity, `SMALL_SCENE_SIZES[0]`: floor and ceiling, back wall, the two
@@ -86,7 +93,7 @@ fn walls_fit_the_box(params: &FrameParams, geometry: &Geometry) -> bool {
 
 /// The largest capacity, which the copy is made for.
 const MAX_WALLS: u32 = 8;
-const MAX_SPHERES: u32 = 4;
+const MAX_SPHERES: u32 = 8;
 
 /// Calls `f(0)`, `f(1)`, ..., `f(N - 1)` (N at most 8), each with a literal
 /// index: once inlined, every read of the copy has a constant offset, and
@@ -113,8 +120,8 @@ fn pick<T: Copy, const N: u32, const L: usize>(items: &[T; L], index: u32) -> T 
     item
 }
 
-/// The first `W` walls and `S` spheres of a scene (`W` at most 8, `S` at
-/// most 4), with the counts in use. Built once per pixel and frame.
+/// The first `W` walls and `S` spheres of a scene (each at most 8), with
+/// the counts in use. Built once per pixel and frame.
 pub struct SmallScene<const W: u32, const S: u32> {
     /// Slots past `W` and `S` are never read, and the compiler drops them.
     walls: [Wall; MAX_WALLS as usize],
@@ -158,7 +165,7 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
         let s = &geometry.spheres;
         Self {
             walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
-            spheres: [s[0], s[1], s[2], s[3]],
+            spheres: [s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]],
             wall_count: params.wall_count.min(W),
             sphere_count: params.sphere_count.min(S),
         }
@@ -273,9 +280,10 @@ pub fn scene_constants<const W: u32, const S: u32>(params: &FrameParams, geometr
     }
     let mut words = Write(vec![0; constant_words(W, S)]);
     words.0[0] = 1;
-    let (mut params, mut walls, mut spheres) = (*params, [Wall::default(); 8], [Sphere::default(); 4]);
-    walls.copy_from_slice(&geometry.walls[..8]);
-    spheres.copy_from_slice(&geometry.spheres[..4]);
+    let (mut params, mut walls, mut spheres) =
+        (*params, [Wall::default(); MAX_WALLS as usize], [Sphere::default(); MAX_SPHERES as usize]);
+    walls.copy_from_slice(&geometry.walls[..MAX_WALLS as usize]);
+    spheres.copy_from_slice(&geometry.spheres[..MAX_SPHERES as usize]);
     visit_constants::<W, S>(&mut words, &mut params, &mut walls, &mut spheres);
     words.0
 }
@@ -294,7 +302,8 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
             (*params, Self::new(params, geometry))
         } else {
             let mut params = *params;
-            let (mut walls, mut spheres) = ([Wall::default(); 8], [Sphere::default(); 4]);
+            let (mut walls, mut spheres) =
+                ([Wall::default(); MAX_WALLS as usize], [Sphere::default(); MAX_SPHERES as usize]);
             visit_constants::<W, S>(&mut Read(constants), &mut params, &mut walls, &mut spheres);
             let (wall_count, sphere_count) = (params.wall_count.min(W), params.sphere_count.min(S));
             (params, Self { walls, spheres, wall_count, sphere_count })
@@ -370,7 +379,7 @@ mod tests {
     use spirv_std::glam::Vec3;
 
     /// Up to 8 walls: the default room (floor, ceiling, back, left, right),
-    /// a front wall and two panels inside; up to 4 spheres.
+    /// a front wall and two panels inside; up to 8 spheres.
     fn scene(walls: usize, spheres: usize, light: Vec3) -> (FrameParams, Geometry) {
         let v = Vec3::new;
         let a = Vec3::splat(0.73);
@@ -390,6 +399,10 @@ mod tests {
             Sphere::new(v(0.50, 0.28, 0.35), 0.28, a),
             Sphere::new(v(0.6, 1.5, -0.6), 0.2, a),
             Sphere::new(v(-0.6, 1.2, 0.5), 0.1, a),
+            Sphere::new(v(0.0, 0.25, 0.65), 0.2, a),
+            Sphere::new(v(-0.7, 1.7, -0.7), 0.18, a),
+            Sphere::new(v(0.65, 0.9, 0.65), 0.15, a),
+            Sphere::new(v(-0.1, 1.0, -0.75), 0.15, a),
         ];
         // Each object its own albedo, so that shading data read from the
         // wrong one shows.
@@ -415,30 +428,35 @@ mod tests {
     fn fits_a_room_with_the_light_inside_and_nothing_more() {
         let fits = |walls, spheres, light| {
             let (params, geometry) = scene(walls, spheres, light);
-            SmallScene::<8, 4>::fits(&params, &geometry)
+            SmallScene::<8, 8>::fits(&params, &geometry)
         };
         assert!(fits(5, 2, LIGHT), "the default scene");
-        assert!(fits(6, 4, LIGHT), "a closed room, four spheres");
+        assert!(fits(6, 8, LIGHT), "a closed room, eight spheres");
         assert!(!fits(7, 2, LIGHT), "a panel inside the room can shadow the light");
         assert!(!fits(5, 2, Vec3::new(0.0, 1.0, -1.6)), "the back wall is between the light and the room");
         let (mut params, geometry) = scene(5, 2, LIGHT);
         assert!(SmallScene::<5, 2>::fits(&params, &geometry));
         params.sphere_count = 3;
         assert!(!SmallScene::<5, 2>::fits(&params, &geometry));
-        assert!(SmallScene::<8, 4>::fits(&params, &geometry));
-        params.sphere_count = 5;
-        assert!(!SmallScene::<8, 4>::fits(&params, &geometry));
+        assert!(SmallScene::<5, 8>::fits(&params, &geometry));
+        assert!(SmallScene::<8, 8>::fits(&params, &geometry));
+        params.sphere_count = 9;
+        assert!(!SmallScene::<5, 8>::fits(&params, &geometry));
+        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
+        assert_eq!(smallest_fit(&params, &geometry), None, "nine spheres: the general loops");
         params.sphere_count = 2;
         params.wall_count = 9;
-        assert!(!SmallScene::<8, 4>::fits(&params, &geometry));
+        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
         // The renderer's choice: the smallest capacity that fits.
         let choice = |walls, spheres, light| {
             let (params, geometry) = scene(walls, spheres, light);
             smallest_fit(&params, &geometry).map(|i| SMALL_SCENE_SIZES[i])
         };
         assert_eq!(choice(5, 2, LIGHT), Some((5, 2)));
-        assert_eq!(choice(5, 3, LIGHT), Some((8, 4)));
-        assert_eq!(choice(6, 0, LIGHT), Some((8, 4)));
+        assert_eq!(choice(5, 3, LIGHT), Some((5, 8)), "the box, more spheres");
+        assert_eq!(choice(5, 8, LIGHT), Some((5, 8)));
+        assert_eq!(choice(6, 0, LIGHT), Some((8, 8)));
+        assert_eq!(choice(6, 8, LIGHT), Some((8, 8)));
         assert_eq!(choice(7, 2, LIGHT), None);
         assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
     }
@@ -473,15 +491,18 @@ mod tests {
             assert_eq!((copy.walls, copy.spheres), (reference.walls, reference.spheres));
         }
         check::<5, 2, { constant_words(5, 2) }>(5, 2);
-        check::<8, 4, { constant_words(8, 4) }>(8, 4);
-        check::<8, 4, { constant_words(8, 4) }>(6, 3);
+        check::<5, 8, { constant_words(5, 8) }>(5, 8);
+        check::<5, 8, { constant_words(5, 8) }>(5, 3);
+        check::<8, 8, { constant_words(8, 8) }>(8, 8);
+        check::<8, 8, { constant_words(8, 8) }>(6, 3);
     }
 
     #[test]
     fn the_box_slots_fold_to_their_axes() {
         assert_eq!((0..5).map(box_axis).collect::<Vec<_>>(), BOX_AXES);
         assert!(is_box(5) && !is_box(8));
-        assert_eq!(SMALL_SCENE_SIZES[0].0, BOX_AXES.len() as u32, "the smaller capacity is the box");
+        assert_eq!(SMALL_SCENE_SIZES[0].0, BOX_AXES.len() as u32, "the smallest capacity is the box");
+        assert_eq!(SMALL_SCENE_SIZES[1].0, BOX_AXES.len() as u32, "so is the next, with more spheres");
     }
 
     #[test]
@@ -498,7 +519,7 @@ mod tests {
         assert_eq!(with_walls(&[floor, ceiling, back]), (true, Some((5, 2))), "the first slots");
         // The side walls first: the slots' axes differ, the larger capacity
         // (every wall tested in full) takes the scene.
-        assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 4))));
+        assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 8))));
         // A floor whose edges are turned in its plane is still on its axis;
         // a tilted ceiling is not.
         let turned =
@@ -506,7 +527,7 @@ mod tests {
         assert_eq!(with_walls(&[turned, ceiling, back, left, right]), (true, Some((5, 2))));
         let tilted =
             Wall::new(ceiling.corner, ceiling.edge_u, ceiling.edge_v + Vec3::new(0.0, 0.01, 0.0), ceiling.albedo);
-        assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 4))));
+        assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 8))));
     }
 
     /// Rays from random points in the room in random directions, and from
@@ -518,13 +539,16 @@ mod tests {
     fn answers_exactly_as_the_general_loops() {
         let mut rng = Rng::new(9, 8, 7, 6, 5);
         let mut shadow_rays = (0, 0);
-        for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (6, 4), (8, 3), (8, 4)] {
+        for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (5, 3), (5, 8), (6, 4), (8, 3), (8, 8)] {
             let (params, geometry) = scene(walls, spheres, LIGHT);
-            // The smallest capacity that holds the counts, as the renderer picks.
+            // The smallest capacity that holds the counts, as the renderer
+            // picks (the first five walls of `scene` are the box's).
             let (small, fits): (&dyn SceneView, bool) = if walls <= 5 && spheres <= 2 {
                 (&SmallScene::<5, 2>::new(&params, &geometry), SmallScene::<5, 2>::fits(&params, &geometry))
+            } else if walls <= 5 {
+                (&SmallScene::<5, 8>::new(&params, &geometry), SmallScene::<5, 8>::fits(&params, &geometry))
             } else {
-                (&SmallScene::<8, 4>::new(&params, &geometry), SmallScene::<8, 4>::fits(&params, &geometry))
+                (&SmallScene::<8, 8>::new(&params, &geometry), SmallScene::<8, 8>::fits(&params, &geometry))
             };
             let shadow_walls = ShadowWalls::new(&params, &geometry);
             let mut kinds = [0u32; 4];

@@ -663,13 +663,14 @@ mod tests {
         assert!((nearest_on_wall(floor, p) - Vec3::new(0.3, 0.0, -0.2)).length() < 1e-6);
     }
 
-    /// The camera sees every suite, held-out and probe light's rim but one:
+    /// The camera sees the light's rim in every scene of the suite, the
+    /// held-out set, the probes and the scenes with more spheres but one:
     /// in the probe whose large sphere stands before part of it, the light
     /// edge's control variate is off.
     #[test]
     fn the_light_edge_control_variate_is_off_where_something_hides_the_lights_rim() {
-        let scenes = scene_files(&["", "holdout", "probe"]);
-        assert_eq!(scenes.len(), 28);
+        let scenes = scene_files(&["", "holdout", "probe", "spheres"]);
+        assert_eq!(scenes.len(), 32);
         for (name, scene) in scenes {
             let hidden = name == "low-medium";
             assert_eq!(silhouette_in_view(&scene), !hidden, "{name}");

@@ -45,9 +45,9 @@ fn entry_points(module: &Module) -> Vec<(ShaderStage, String)> {
             .collect();
     want.sort();
     assert_eq!(names, want);
-    // Two capacities, three samplers, three forms of optional code, with
+    // Three capacities, three samplers, three forms of optional code, with
     // and without the roulette's code.
-    assert_eq!(small.len(), 36);
+    assert_eq!(small.len(), 54);
     assert!(names.contains(&"accumulate_small_5w_2s_sobol_unconnected_noglow_noroulette"));
     eps
 }

@@ -489,8 +489,8 @@ mod tests {
         assert_eq!(entry(deep & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep_unconnected_noglow");
         let no_nee = (deep | FLAG_CONNECT) & !FLAG_NEE;
         assert_eq!(
-            small_scene_entry((8, 4), SmallVariant::of(&frame(no_nee))),
-            "accumulate_small_8w_4s_sobol_deep_unconnected"
+            small_scene_entry((8, 8), SmallVariant::of(&frame(no_nee))),
+            "accumulate_small_8w_8s_sobol_deep_unconnected"
         );
         // Roulette from the fifth bounce of five, with NEE and a black
         // background: no path draws a direction at its fifth vertex.
