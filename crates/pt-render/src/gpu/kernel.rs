@@ -6,7 +6,8 @@ use pt_core::FrameParams;
 use pt_core::Geometry;
 use pt_core::bsdf::glow_probability;
 use pt_core::integrator::{SamplerKind, connects, roulette_acts};
-use pt_core::small_scene::SMALL_SCENE_SIZES;
+use pt_core::query::ShadowWalls;
+use pt_core::small_scene::{SMALL_SCENE_SIZES, smallest_fit};
 
 use super::KERNEL_SPV;
 use super::bindings::{ACCUM, DISPLAY, GEOMETRY, NON_FINITE, bind_group_layout, storage_entry, uniform_entry};
@@ -159,6 +160,30 @@ pub(super) fn small_scene_index(size: usize, variant: SmallVariant) -> usize {
     size * per_size
         + (variant.sampler as usize * SmallCode::ALL.len() + variant.code as usize) * 2
         + !variant.roulette as usize
+}
+
+/// Why no small-scene capacity holds a scene, in words for a notice: the
+/// renderer then traces it with the general kernel, which makes the same
+/// image but which lavapipe runs several times slower. `None` where a
+/// capacity of `SMALL_SCENE_SIZES` holds it.
+pub fn small_scene_misfit(params: &FrameParams, geometry: &Geometry) -> Option<String> {
+    if smallest_fit(params, geometry).is_some() {
+        return None;
+    }
+    let (walls, spheres) = SMALL_SCENE_SIZES.iter().fold((0, 0), |(w, s), &(a, b)| (w.max(a), s.max(b)));
+    let mut why = Vec::new();
+    if params.sphere_count > spheres {
+        why.push(format!("{} spheres (the small-scene kernel holds {spheres})", params.sphere_count));
+    }
+    if params.wall_count > walls {
+        why.push(format!("{} walls (the small-scene kernel holds {walls})", params.wall_count));
+    }
+    if !ShadowWalls::new(params, geometry).is_empty() {
+        why.push(
+            "a wall that can block the light (the small-scene kernel holds a closed room with the light inside)".into(),
+        );
+    }
+    Some(why.join(" and "))
 }
 
 /// Every small-scene entry point: capacities in `SMALL_SCENE_SIZES`' order,
@@ -463,6 +488,31 @@ mod tests {
         // Unchanged but for the constants: the defaults give the module
         // wgpu gets.
         assert_eq!(kernel_words().len(), out.len());
+    }
+
+    /// The notice names what keeps a scene off the small-scene kernel:
+    /// nothing for a scene of 8 spheres, the count for a ninth, the wall
+    /// for a panel that can shadow the light.
+    #[test]
+    fn a_misfit_says_why() {
+        use crate::scene::{NamedSphere, NamedWall, Scene};
+        use pt_core::glam::Vec3;
+        let misfit = |scene: &Scene| {
+            let settings = scene.render;
+            small_scene_misfit(&scene.frame_params(&settings, 1, 0), &scene.geometry().unwrap())
+        };
+        let mut scene = Scene::default_scene();
+        assert_eq!(misfit(&scene), None);
+        for k in 0..7 {
+            let sphere = pt_core::Sphere::new(Vec3::new(-0.75 + 0.25 * k as f32, 1.2, 0.6), 0.08, Vec3::splat(0.5));
+            scene.spheres.push(NamedSphere { name: format!("extra {k}"), sphere });
+            let want = (k == 6).then(|| "9 spheres (the small-scene kernel holds 8)".to_string());
+            assert_eq!(misfit(&scene), want, "{} spheres", scene.spheres.len());
+        }
+        let mut panel = Scene::default_scene();
+        let wall = pt_core::Wall::new(Vec3::new(-0.5, 1.0, -0.5), Vec3::X, Vec3::new(0.0, 0.2, 0.6), Vec3::splat(0.5));
+        panel.walls.push(NamedWall { name: "panel".into(), wall });
+        assert!(misfit(&panel).is_some_and(|why| why.starts_with("a wall that can block the light")));
     }
 
     #[test]

@@ -17,7 +17,9 @@ pub mod timer;
 
 pub use blit::Blit;
 pub use context::{GpuContext, PendingRead};
-pub use kernel::{TraceKernel, WORKGROUP_SHAPES, kernel_words, small_scene_entries, specialized_spirv};
+pub use kernel::{
+    TraceKernel, WORKGROUP_SHAPES, kernel_words, small_scene_entries, small_scene_misfit, specialized_spirv,
+};
 pub use renderer::GpuRenderer;
 pub use timer::GpuTimer;
 
