@@ -23,13 +23,13 @@
 //! (software ones and NVIDIA's), the general form for other scenes and
 //! other adapters (docs/ARCHITECTURE.md has the figures).
 //!
-//! The smaller capacity is for a box room: its wall slots are the floor
-//! and the ceiling, the back wall and the two side walls, in that order
-//! ([`BOX_AXES`]), each with its normal exactly on an axis
-//! ([`Wall::normal_axis`]), and it tests them with
+//! The two smaller capacities are for a box room: their wall slots are the
+//! floor and the ceiling, the back wall and the two side walls, in that
+//! order ([`BOX_AXES`]), each with its normal exactly on an axis
+//! ([`Wall::normal_axis`]), and they test them with
 //! [`crate::wall::intersect_wall_on_axis`]: the same `t` in two fifths of
-//! the arithmetic. A scene of that size whose walls come in another order
-//! or lie on no axis takes the larger capacity.
+//! the arithmetic. A scene of five walls whose walls come in another order
+//! or lie on no axis takes the capacity of eight walls.
 //!
 //! The copy can also come from the entry point's specialization constants
 //! ([`scene_constants`], [`SmallScene::with_constants`]): set by the host
@@ -59,9 +59,9 @@ use spirv_std::glam::Vec3;
 pub const SMALL_SCENE_SIZES: [(u32, u32); 3] = [(5, 2), (5, 8), (8, 8)];
 
 /// The axis of the normal (0 x, 1 y, 2 z) of each wall slot of the box
-/// capacity, `SMALL_SCENE_SIZES[0]`: floor and ceiling, back wall, the two
-/// side walls, the order of the scene files of `scenes/`. A scene with
-/// fewer walls fills the first slots.
+/// capacities, `SMALL_SCENE_SIZES[0]` and `[1]`: floor and ceiling, back
+/// wall, the two side walls, the order of the scene files of `scenes/`. A
+/// scene with fewer walls fills the first slots.
 pub const BOX_AXES: [u32; 5] = [1, 1, 2, 0, 0];
 
 /// Whether the capacity with `walls` walls is the box one, whose wall
@@ -131,7 +131,7 @@ pub struct SmallScene<const W: u32, const S: u32> {
 }
 
 /// Whether capacity `(walls, spheres)` holds the scene's counts and, for
-/// the box capacity, its walls ([`BOX_AXES`]).
+/// a box capacity, its walls ([`BOX_AXES`]).
 fn holds(params: &FrameParams, geometry: &Geometry, (walls, spheres): (u32, u32)) -> bool {
     params.wall_count <= walls
         && params.sphere_count <= spheres
@@ -151,7 +151,7 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
     /// Whether this capacity renders the scene exactly as the general
     /// loops: it holds every wall and sphere, and no wall can block a
     /// shadow ray (which is what a closed room with the light inside gives),
-    /// so that shadow rays test spheres only; and for the box capacity, the
+    /// so that shadow rays test spheres only; and for a box capacity, the
     /// walls have its axes ([`BOX_AXES`]).
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
         holds(params, geometry, (W, S)) && ShadowWalls::new(params, geometry).is_empty()
@@ -517,8 +517,8 @@ mod tests {
         let [floor, ceiling, back, left, right, _] = crate::test_support::closed_room();
         assert_eq!(with_walls(&[floor, ceiling, back, left, right]), (true, Some((5, 2))));
         assert_eq!(with_walls(&[floor, ceiling, back]), (true, Some((5, 2))), "the first slots");
-        // The side walls first: the slots' axes differ, the larger capacity
-        // (every wall tested in full) takes the scene.
+        // The side walls first: the slots' axes differ, the capacity of
+        // eight walls (every wall tested in full) takes the scene.
         assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 8))));
         // A floor whose edges are turned in its plane is still on its axis;
         // a tilted ceiling is not.
