@@ -565,6 +565,12 @@ pub fn plot_suite(
             .y_desc("relMSE")
             .x_label_formatter(&|x| format!("{x:.2}"))
             .y_label_formatter(&|y| format!("{y:.0e}"))
+            // On a log axis of under two decades plotters labels every
+            // tenth of a decade, with light lines between: a grey band.
+            .x_labels(5)
+            .y_labels(5)
+            .x_max_light_lines(1)
+            .y_max_light_lines(1)
             .label_style(("sans-serif", 12))
             .draw()?;
         chart.draw_series(LineSeries::new([(t0 * 0.8, target), (t1 * 1.25, target)], BLACK.mix(0.3)))?;
