@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
-use pt_render::gpu::{GpuRenderer, TraceKernel, small_scene_misfit};
+use pt_render::GpuRenderer;
 use pt_render::output::{self, OutputFormat};
 use pt_render::parts;
 use pt_render::renderer::{TiledRender, device_tiles, render_tiled};
@@ -84,10 +84,10 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         let tiles = device_tiles(device, settings.width, settings.height);
         eprintln!("{}", device.description());
         if let Device::Gpu(ctx) = device
-            && GpuRenderer::default_trace_kernel(ctx) != TraceKernel::General
-            && let Some(why) = scene.geometry().ok().and_then(|g| small_scene_misfit(&params, &g))
+            && let Some(notice) =
+                scene.geometry().ok().and_then(|g| GpuRenderer::general_kernel_notice(ctx, &params, &g))
         {
-            eprintln!("note: the general kernel traces this scene, several times slower on this adapter: {why}");
+            eprintln!("{notice}");
         }
         eprintln!(
             "rendering {}x{}, {} spp, max {} bounces, seed {}{}{}",

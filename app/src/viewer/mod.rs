@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use anyhow::{Context, Result, anyhow};
 use pt_render::output;
-use pt_render::{GpuContext, Scene};
+use pt_render::{GpuContext, GpuRenderer, Scene};
 use pt_viewer::session::Waiting;
 use pt_viewer::{Actions, Files, Paths, Session};
 use winit::application::ApplicationHandler;
@@ -157,6 +157,11 @@ impl Viewer {
         let mut scene = args.scene.clone();
         if let Some(b) = args.max_bounces {
             scene.render.max_bounces = b;
+        }
+        let params = scene.frame_params(&scene.render, 1, 0);
+        if let Some(notice) = scene.geometry().ok().and_then(|g| GpuRenderer::general_kernel_notice(&ctx, &params, &g))
+        {
+            eprintln!("{notice}");
         }
         let scene_path = args.scene_path.as_ref().map_or("scene.toml".to_owned(), |p| p.display().to_string());
         let files = Files {

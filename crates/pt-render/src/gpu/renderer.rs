@@ -313,6 +313,17 @@ impl GpuRenderer {
         }
     }
 
+    /// The notice for a user whose scene the small-scene kernel cannot
+    /// trace on an adapter where it is the default
+    /// ([`super::kernel::small_scene_misfit`] says why); `None` elsewhere.
+    pub fn general_kernel_notice(ctx: &GpuContext, params: &FrameParams, geometry: &Geometry) -> Option<String> {
+        if Self::default_trace_kernel(ctx) == TraceKernel::General {
+            return None;
+        }
+        let why = super::kernel::small_scene_misfit(params, geometry)?;
+        Some(format!("note: the general kernel traces this scene, several times slower on this adapter: {why}"))
+    }
+
     /// Chooses the form of the trace kernel (compiled now if need be; the
     /// renderer starts with [`GpuRenderer::default_trace_kernel`]). The small-scene kernel
     /// comes in the default 8x8 shape only.
