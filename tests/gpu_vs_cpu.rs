@@ -387,6 +387,12 @@ fn scenes_that_do_not_fit_run_on_the_general_kernel() {
     let mut panel = Scene::default_scene();
     let wall = pt_core::Wall::new(Vec3::new(-0.5, 1.0, -0.5), Vec3::X, Vec3::new(0.0, 0.2, 0.6), Vec3::splat(0.5));
     panel.walls.push(pt_render::scene::NamedWall { name: "panel".into(), wall });
+    // Where the small-scene kernel is the adapter's default (lavapipe, where
+    // CI runs this), the user is told why a scene does not get it.
+    let small_default = GpuRenderer::default_trace_kernel(&ctx) != TraceKernel::General;
+    assert_eq!(GpuRenderer::general_kernel_notice(&ctx, &Scene::default_scene()), None);
+    let notice = GpuRenderer::general_kernel_notice(&ctx, &nine_spheres);
+    assert_eq!(notice.is_some_and(|n| n.ends_with("9 spheres (the small-scene kernel holds 8)")), small_default);
     for scene in [nine_spheres, panel] {
         let (used, fallback) = render_with(&ctx, &scene, TraceKernel::SmallScene);
         assert_eq!(used, TraceKernel::General);

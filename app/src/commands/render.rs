@@ -84,8 +84,7 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         let tiles = device_tiles(device, settings.width, settings.height);
         eprintln!("{}", device.description());
         if let Device::Gpu(ctx) = device
-            && let Some(notice) =
-                scene.geometry().ok().and_then(|g| GpuRenderer::general_kernel_notice(ctx, &params, &g))
+            && let Some(notice) = GpuRenderer::general_kernel_notice(ctx, &scene)
         {
             eprintln!("{notice}");
         }

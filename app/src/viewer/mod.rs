@@ -158,9 +158,7 @@ impl Viewer {
         if let Some(b) = args.max_bounces {
             scene.render.max_bounces = b;
         }
-        let params = scene.frame_params(&scene.render, 1, 0);
-        if let Some(notice) = scene.geometry().ok().and_then(|g| GpuRenderer::general_kernel_notice(&ctx, &params, &g))
-        {
+        if let Some(notice) = GpuRenderer::general_kernel_notice(&ctx, &scene) {
             eprintln!("{notice}");
         }
         let scene_path = args.scene_path.as_ref().map_or("scene.toml".to_owned(), |p| p.display().to_string());

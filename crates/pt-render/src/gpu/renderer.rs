@@ -12,6 +12,7 @@ use super::kernel::{
     Kernel, SmallKernels, SmallVariant, TraceKernel, WORKGROUP_SHAPES, compute_pipeline, small_scene_index,
 };
 use super::{GpuContext, GpuError, GpuTimer};
+use crate::scene::Scene;
 
 /// The progressive GPU renderer for one scene and one tile of its image
 /// (`FrameParams::tile`, the whole image unless a render is tiled).
@@ -316,11 +317,14 @@ impl GpuRenderer {
     /// The notice for a user whose scene the small-scene kernel cannot
     /// trace on an adapter where it is the default
     /// ([`super::kernel::small_scene_misfit`] says why); `None` elsewhere.
-    pub fn general_kernel_notice(ctx: &GpuContext, params: &FrameParams, geometry: &Geometry) -> Option<String> {
+    pub fn general_kernel_notice(ctx: &GpuContext, scene: &Scene) -> Option<String> {
         if Self::default_trace_kernel(ctx) == TraceKernel::General {
             return None;
         }
-        let why = super::kernel::small_scene_misfit(params, geometry)?;
+        // The fit depends on the counts, the walls and the light only: no
+        // flags (whose defaults take a pass over the scene) are worked out.
+        let params = scene.frame_params_with_flags(&scene.render, 1, 0, 0);
+        let why = super::kernel::small_scene_misfit(&params, &scene.geometry().ok()?)?;
         Some(format!("note: the general kernel traces this scene, several times slower on this adapter: {why}"))
     }
 
