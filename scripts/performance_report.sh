@@ -8,7 +8,9 @@
 #   scripts/performance_report.sh holdout  the held-out scenes only
 #   scripts/performance_report.sh probe    the probe scenes only
 #   scripts/performance_report.sh spheres  the scenes with more spheres only
-#   scripts/performance_report.sh rebuild  the four suites' sections again
+#   scripts/performance_report.sh contact  the scenes where walls cut the
+#                                          light or spheres only
+#   scripts/performance_report.sh rebuild  the five suites' sections again
 #                                          from their runs' points, measuring
 #                                          nothing (after a change to the
 #                                          report's tables)
@@ -34,8 +36,9 @@ agreement() {
 
 # One suite's bench arguments, its folder, Mitsuba's folder and its report:
 # the scene suite (scenes/, docs/PERFORMANCE.md) for "", else the held-out
-# scenes (scenes/holdout/), the probes (scenes/probe/) or the scenes with
-# more spheres (scenes/spheres/) in their own report, docs/bench/NAME.md.
+# scenes (scenes/holdout/), the probes (scenes/probe/), the scenes with
+# more spheres (scenes/spheres/) or those where walls cut the light or
+# spheres (scenes/contact/) in their own report, docs/bench/NAME.md.
 suite_of() {
     if [ -z "$1" ]; then
         dir=$out mitsuba=$out/mitsuba-suite report=docs/PERFORMANCE.md
@@ -58,13 +61,13 @@ measure_suite() {
 
 case "${1:-all}" in
     rebuild)
-        for which in "" holdout probe spheres; do
+        for which in "" holdout probe spheres contact; do
             suite_of "$which"
             "$bin" bench convergence "${args[@]}" --mitsuba-dir "$mitsuba" --report "$report" --from-csv
         done
         exit 0
         ;;
-    holdout | probe | spheres)
+    holdout | probe | spheres | contact)
         measure_suite "$1"
         exit 0
         ;;

@@ -84,7 +84,7 @@ pub(crate) fn run(args: &RenderArgs) -> Result<()> {
         let tiles = device_tiles(device, settings.width, settings.height);
         eprintln!("{}", device.description());
         if let Device::Gpu(ctx) = device
-            && let Some(notice) = GpuRenderer::general_kernel_notice(ctx, &scene)
+            && let Some(notice) = GpuRenderer::general_kernel_notice(&scene, GpuRenderer::default_trace_kernel(ctx))
         {
             eprintln!("{notice}");
         }

@@ -158,7 +158,10 @@ impl Viewer {
         if let Some(b) = args.max_bounces {
             scene.render.max_bounces = b;
         }
-        if let Some(notice) = GpuRenderer::general_kernel_notice(&ctx, &scene) {
+        // The viewer's renderer does not compile the scene in (an edit would
+        // wait for a pipeline): `Session` asks for the unspecialized form.
+        let kernel = GpuRenderer::default_trace_kernel(&ctx).unspecialized();
+        if let Some(notice) = GpuRenderer::general_kernel_notice(&scene, kernel) {
             eprintln!("{notice}");
         }
         let scene_path = args.scene_path.as_ref().map_or("scene.toml".to_owned(), |p| p.display().to_string());

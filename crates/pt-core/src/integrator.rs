@@ -511,8 +511,9 @@ pub fn render_pixel_small<
 /// [`render_pixel_small`] with the scene's values taken from `constants`
 /// where they were set (`small_scene::scene_constants`): the same samples,
 /// from values a driver can fold into the code when they are compiled in
-/// as specialization constants. Unset (a first word of 0), it is
-/// `render_pixel_small`.
+/// as specialization constants, for a scene that
+/// [`SmallScene::fits_compiled`] (walls that can block the light
+/// included). Unset (a first word of 0), it is `render_pixel_small`.
 pub fn render_pixel_specialized<
     Smp: Sampler,
     const W: u32,

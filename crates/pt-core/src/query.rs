@@ -193,6 +193,13 @@ impl ShadowWalls {
         i < 96 && (word >> (i % 32)) & 1 != 0
     }
 
+    /// The mask of walls 0 to 31, a bit each: all of a scene's walls
+    /// where it has at most 32.
+    #[inline]
+    pub fn first_32(&self) -> u32 {
+        self.low
+    }
+
     /// Whether no wall can block a shadow ray.
     #[inline]
     pub fn is_empty(&self) -> bool {

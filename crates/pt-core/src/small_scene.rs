@@ -35,14 +35,18 @@
 //! ([`scene_constants`], [`SmallScene::with_constants`]): set by the host
 //! when it makes the pipeline, they let the driver fold the scene, the
 //! camera and the settings into the code, operands instead of registers,
-//! which is what lavapipe spills most.
+//! which is what lavapipe spills most. Compiled in, the copy also holds
+//! the walls that can block the light ([`ShadowWalls`]: a light that
+//! touches or crosses a wall, a sphere sunk into one), whose shadow tests
+//! then cost only the scenes that have such walls
+//! ([`SmallScene::fits_compiled`]).
 
 use crate::geometry::Geometry;
 use crate::params::FrameParams;
 use crate::query::{Hit, SceneView, ShadowWalls, Surface, sphere_blocks, surface_of};
 use crate::ray::Ray;
 use crate::sphere::Sphere;
-use crate::wall::{Wall, intersect_wall_on_axis};
+use crate::wall::{Wall, intersect_wall, intersect_wall_on_axis};
 use spirv_std::glam::Vec3;
 
 /// The capacities (walls, spheres besides the light) the kernel has a
@@ -128,6 +132,11 @@ pub struct SmallScene<const W: u32, const S: u32> {
     spheres: [Sphere; MAX_SPHERES as usize],
     wall_count: u32,
     sphere_count: u32,
+    /// The slots of the walls that shadow rays test, a bit each: the
+    /// scene's [`ShadowWalls`] where the copy was compiled in, else none
+    /// (where none can block the light, [`SmallScene::fits`]). A constant
+    /// either way, so the tests of the other slots fold away.
+    shadow_walls: u32,
 }
 
 /// Whether capacity `(walls, spheres)` holds the scene's counts and, for
@@ -139,22 +148,40 @@ fn holds(params: &FrameParams, geometry: &Geometry, (walls, spheres): (u32, u32)
 }
 
 /// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that fits
-/// the scene ([`SmallScene::fits`]), if any: what the renderer runs.
+/// the scene read from the buffers ([`SmallScene::fits`]), if any: what
+/// the renderer runs where the scene is not compiled in.
 pub fn smallest_fit(params: &FrameParams, geometry: &Geometry) -> Option<usize> {
     if !ShadowWalls::new(params, geometry).is_empty() {
         return None;
     }
+    smallest_fit_compiled(params, geometry)
+}
+
+/// The index in [`SMALL_SCENE_SIZES`] of the smallest capacity that fits
+/// the scene compiled in ([`SmallScene::fits_compiled`]), if any: what the
+/// renderer specializes.
+pub fn smallest_fit_compiled(params: &FrameParams, geometry: &Geometry) -> Option<usize> {
     SMALL_SCENE_SIZES.iter().position(|&size| holds(params, geometry, size))
 }
 
 impl<const W: u32, const S: u32> SmallScene<W, S> {
-    /// Whether this capacity renders the scene exactly as the general
-    /// loops: it holds every wall and sphere, and no wall can block a
-    /// shadow ray (which is what a closed room with the light inside gives),
-    /// so that shadow rays test spheres only; and for a box capacity, the
-    /// walls have its axes ([`BOX_AXES`]).
+    /// Whether this capacity, reading the scene from the buffers
+    /// ([`SmallScene::new`]), renders it exactly as the general loops: it
+    /// holds every wall and sphere, and no wall can block a shadow ray
+    /// (which is what a closed room with the light inside gives), so that
+    /// shadow rays test spheres only; and for a box capacity, the walls
+    /// have its axes ([`BOX_AXES`]).
     pub fn fits(params: &FrameParams, geometry: &Geometry) -> bool {
-        holds(params, geometry, (W, S)) && ShadowWalls::new(params, geometry).is_empty()
+        Self::fits_compiled(params, geometry) && ShadowWalls::new(params, geometry).is_empty()
+    }
+
+    /// Whether this capacity, with the scene compiled in
+    /// ([`scene_constants`]), renders it exactly as the general loops: as
+    /// [`SmallScene::fits`], but walls that can block the light are
+    /// allowed, since the constants say which they are and shadow rays
+    /// test those.
+    pub fn fits_compiled(params: &FrameParams, geometry: &Geometry) -> bool {
+        holds(params, geometry, (W, S))
     }
 
     /// The copy of `geometry`'s first walls and spheres. Counts beyond the
@@ -168,6 +195,7 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
             spheres: [s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]],
             wall_count: params.wall_count.min(W),
             sphere_count: params.sphere_count.min(S),
+            shadow_walls: 0,
         }
     }
 }
@@ -175,9 +203,9 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
 /// Words of a scene's constants before its walls: a marker (0 in a
 /// module whose constants were not set: read the buffers), the camera
 /// (12), the light (7), the background (3), then the image size, the
-/// bounce limit, the roulette's start, the wall and sphere counts and the
-/// flags.
-const HEAD_WORDS: usize = 30;
+/// bounce limit, the roulette's start, the wall and sphere counts, the
+/// flags and the walls that can block the light (a bit per slot).
+const HEAD_WORDS: usize = 31;
 /// Words per wall and per sphere.
 const WALL_WORDS: usize = 22;
 const SPHERE_WORDS: usize = 7;
@@ -226,6 +254,7 @@ impl<const N: usize> Words for Read<'_, N> {
 fn visit_constants<const W: u32, const S: u32>(
     words: &mut impl Words,
     params: &mut FrameParams,
+    shadow_walls: &mut u32,
     walls: &mut [Wall; MAX_WALLS as usize],
     spheres: &mut [Sphere; MAX_SPHERES as usize],
 ) {
@@ -246,6 +275,7 @@ fn visit_constants<const W: u32, const S: u32>(
     words.word(27, &mut params.wall_count);
     words.word(28, &mut params.sphere_count);
     words.word(29, &mut params.flags);
+    words.word(30, shadow_walls);
     unrolled::<W>(|i| {
         let (w, at) = (&mut walls[i as usize], HEAD_WORDS + i as usize * WALL_WORDS);
         words.vec3(at, &mut w.corner);
@@ -269,7 +299,7 @@ fn visit_constants<const W: u32, const S: u32>(
 /// `constant_words(W, S)` words: compiled into a small-scene pipeline, they
 /// let the driver fold the scene into the code (a literal operand instead
 /// of a register or a spill per value on lavapipe). The caller checks
-/// [`SmallScene::fits`].
+/// [`SmallScene::fits_compiled`].
 #[cfg(not(target_arch = "spirv"))]
 pub fn scene_constants<const W: u32, const S: u32>(params: &FrameParams, geometry: &Geometry) -> Vec<u32> {
     struct Write(Vec<u32>);
@@ -284,7 +314,9 @@ pub fn scene_constants<const W: u32, const S: u32>(params: &FrameParams, geometr
         (*params, [Wall::default(); MAX_WALLS as usize], [Sphere::default(); MAX_SPHERES as usize]);
     walls.copy_from_slice(&geometry.walls[..MAX_WALLS as usize]);
     spheres.copy_from_slice(&geometry.spheres[..MAX_SPHERES as usize]);
-    visit_constants::<W, S>(&mut words, &mut params, &mut walls, &mut spheres);
+    // The caller checked that the capacity holds every wall: no bit past W.
+    let mut shadow_walls = ShadowWalls::new(&params, geometry).first_32();
+    visit_constants::<W, S>(&mut words, &mut params, &mut shadow_walls, &mut walls, &mut spheres);
     words.0
 }
 
@@ -304,9 +336,10 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
             let mut params = *params;
             let (mut walls, mut spheres) =
                 ([Wall::default(); MAX_WALLS as usize], [Sphere::default(); MAX_SPHERES as usize]);
-            visit_constants::<W, S>(&mut Read(constants), &mut params, &mut walls, &mut spheres);
+            let mut shadow_walls = 0;
+            visit_constants::<W, S>(&mut Read(constants), &mut params, &mut shadow_walls, &mut walls, &mut spheres);
             let (wall_count, sphere_count) = (params.wall_count.min(W), params.sphere_count.min(S));
-            (params, Self { walls, spheres, wall_count, sphere_count })
+            (params, Self { walls, spheres, wall_count, sphere_count, shadow_walls })
         }
     }
 
@@ -317,15 +350,22 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
         let mut hit = Hit::none(t_max);
         unrolled::<W>(|i| {
             if i < self.wall_count && i != skip_wall {
-                if is_box(W) {
-                    let t = intersect_wall_on_axis(&self.walls[i as usize], box_axis(i), ray, 0.0, hit.t);
-                    hit.take_wall(i, t);
-                } else {
-                    hit.test_wall(i, &self.walls[i as usize], ray);
-                }
+                hit.take_wall(i, self.wall_t(i, ray, hit.t));
             }
         });
         hit
+    }
+
+    /// Where the ray meets wall slot `i` in (0, `t_max`), `t_max` if
+    /// nowhere: on the slot's axis in a box capacity, which gives the same
+    /// `t` in less arithmetic.
+    #[inline(always)]
+    fn wall_t(&self, i: u32, ray: &Ray, t_max: f32) -> f32 {
+        if is_box(W) {
+            intersect_wall_on_axis(&self.walls[i as usize], box_axis(i), ray, 0.0, t_max)
+        } else {
+            intersect_wall(&self.walls[i as usize], ray, 0.0, t_max)
+        }
     }
 }
 
@@ -347,11 +387,16 @@ impl<const W: u32, const S: u32> SceneView for SmallScene<W, S> {
         self.nearest_wall(ray, crate::query::NO_WALL, crate::query::T_FAR)
     }
 
-    /// Spheres only: [`SmallScene::fits`] leaves no wall that can block a
-    /// shadow ray.
-    fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, _skip_wall: u32, t_max: f32) -> bool {
+    /// The spheres, and the walls of the copy's own mask: none where the
+    /// scene is read from the buffers ([`SmallScene::fits`] leaves no wall
+    /// that can block a shadow ray), the scene's [`ShadowWalls`] where it is
+    /// compiled in. The same answer as [`crate::query::occluded`].
+    fn occluded(&self, ray: &Ray, _params: &FrameParams, _walls: &ShadowWalls, skip_wall: u32, t_max: f32) -> bool {
         let mut blocked = false;
         unrolled::<S>(|i| blocked |= i < self.sphere_count && sphere_blocks(&self.spheres[i as usize], ray, t_max));
+        unrolled::<W>(|i| {
+            blocked |= (self.shadow_walls >> i) & 1 != 0 && i != skip_wall && self.wall_t(i, ray, t_max) < t_max
+        });
         blocked
     }
 
@@ -423,6 +468,19 @@ mod tests {
     }
 
     const LIGHT: Vec3 = Vec3::new(0.0, 1.7, 0.0);
+    /// A light of `scene`'s radius 0.15 whose top crosses the ceiling
+    /// (y = 2): the ceiling can block it.
+    const THROUGH_CEILING: Vec3 = Vec3::new(0.1, 1.95, -0.2);
+
+    /// The copy of capacity `(W, S)` with the scene compiled in, as a
+    /// specialized pipeline reads it (`N` is `constant_words(W, S)`).
+    fn compiled<const W: u32, const S: u32, const N: usize>(
+        params: &FrameParams,
+        geometry: &Geometry,
+    ) -> SmallScene<W, S> {
+        let constants: [u32; N] = scene_constants::<W, S>(params, geometry).try_into().expect("N words");
+        SmallScene::<W, S>::with_constants(params, geometry, &constants).1
+    }
 
     #[test]
     fn fits_a_room_with_the_light_inside_and_nothing_more() {
@@ -459,6 +517,24 @@ mod tests {
         assert_eq!(choice(6, 8, LIGHT), Some((8, 8)));
         assert_eq!(choice(7, 2, LIGHT), None);
         assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
+        assert_eq!(choice(5, 2, THROUGH_CEILING), None);
+        // Compiled in, the copy holds the walls that can block the light.
+        let compiled_choice = |walls, spheres, light| {
+            let (params, geometry) = scene(walls, spheres, light);
+            smallest_fit_compiled(&params, &geometry).map(|i| SMALL_SCENE_SIZES[i])
+        };
+        assert_eq!(compiled_choice(5, 2, LIGHT), Some((5, 2)));
+        assert_eq!(compiled_choice(5, 2, THROUGH_CEILING), Some((5, 2)));
+        assert_eq!(compiled_choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), Some((5, 2)));
+        assert_eq!(compiled_choice(5, 5, THROUGH_CEILING), Some((5, 8)));
+        assert_eq!(compiled_choice(7, 2, LIGHT), Some((8, 8)), "a panel inside the room");
+        let (mut params, geometry) = scene(5, 8, THROUGH_CEILING);
+        params.sphere_count = 9;
+        assert_eq!(smallest_fit_compiled(&params, &geometry), None, "nine spheres");
+        let (params, geometry) = scene(7, 2, THROUGH_CEILING);
+        assert!(SmallScene::<8, 8>::fits_compiled(&params, &geometry));
+        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
+        assert!(!SmallScene::<5, 8>::fits_compiled(&params, &geometry), "seven walls");
     }
 
     /// The scene constants give back exactly the scene they were made of:
@@ -483,18 +559,23 @@ mod tests {
             assert_eq!(got, want);
             let reference = SmallScene::<W, S>::new(&params, &geometry);
             assert_eq!((copy.wall_count, copy.sphere_count), (walls as u32, spheres as u32));
+            assert_eq!(copy.shadow_walls, ShadowWalls::new(&params, &geometry).first_32());
+            assert_eq!(reference.shadow_walls, 0, "read from the buffers, the scene has none");
             assert_eq!(copy.walls[..walls], reference.walls[..walls]);
             assert_eq!(copy.spheres[..spheres], reference.spheres[..spheres]);
             // Unset: the buffers' values.
             let (got, copy) = SmallScene::<W, S>::with_constants(&params, &geometry, &[0; N]);
             assert_eq!(got, params);
-            assert_eq!((copy.walls, copy.spheres), (reference.walls, reference.spheres));
+            assert_eq!((copy.walls, copy.spheres, copy.shadow_walls), (reference.walls, reference.spheres, 0));
         }
         check::<5, 2, { constant_words(5, 2) }>(5, 2);
         check::<5, 8, { constant_words(5, 8) }>(5, 8);
         check::<5, 8, { constant_words(5, 8) }>(5, 3);
         check::<8, 8, { constant_words(8, 8) }>(8, 8);
         check::<8, 8, { constant_words(8, 8) }>(6, 3);
+        // The walls that can block the light: the two panels of 8 walls.
+        let (params, geometry) = scene(8, 8, LIGHT);
+        assert_eq!(compiled::<8, 8, { constant_words(8, 8) }>(&params, &geometry).shadow_walls, 0b1100_0000);
     }
 
     #[test]
@@ -533,26 +614,61 @@ mod tests {
     /// Rays from random points in the room in random directions, and from
     /// points on its surfaces (leaving their wall): the copy finds exactly
     /// the hit that the uniform block's loops find, for every count of
-    /// walls and spheres it holds; shadow rays toward the light are blocked
-    /// exactly when the general test says so, where the scene fits.
+    /// walls and spheres it holds, read from the buffers and compiled in;
+    /// shadow rays toward the light are blocked exactly when the general
+    /// test says so, where the scene fits the form (compiled in, also
+    /// where walls can block the light: a panel, a light through the
+    /// ceiling, a light behind the back wall).
     #[test]
     fn answers_exactly_as_the_general_loops() {
         let mut rng = Rng::new(9, 8, 7, 6, 5);
         let mut shadow_rays = (0, 0);
-        for (walls, spheres) in [(0, 0), (3, 1), (5, 2), (5, 3), (5, 8), (6, 4), (8, 3), (8, 8)] {
-            let (params, geometry) = scene(walls, spheres, LIGHT);
+        let behind_the_back_wall = Vec3::new(0.0, 1.0, -1.6);
+        let cases = [
+            (0, 0, LIGHT),
+            (3, 1, LIGHT),
+            (5, 2, LIGHT),
+            (5, 3, LIGHT),
+            (5, 8, LIGHT),
+            (6, 4, LIGHT),
+            (8, 3, LIGHT),
+            (8, 8, LIGHT),
+            (7, 2, LIGHT),
+            (5, 2, THROUGH_CEILING),
+            (5, 6, THROUGH_CEILING),
+            (6, 2, THROUGH_CEILING),
+            (5, 2, behind_the_back_wall),
+        ];
+        for (walls, spheres, light) in cases {
+            let (params, geometry) = scene(walls, spheres, light);
             // The smallest capacity that holds the counts, as the renderer
-            // picks (the first five walls of `scene` are the box's).
-            let (small, fits): (&dyn SceneView, bool) = if walls <= 5 && spheres <= 2 {
-                (&SmallScene::<5, 2>::new(&params, &geometry), SmallScene::<5, 2>::fits(&params, &geometry))
+            // picks (the first five walls of `scene` are the box's), read
+            // from the buffers and compiled in.
+            let (buffers, compiled, fits): (&dyn SceneView, &dyn SceneView, bool) = if walls <= 5 && spheres <= 2 {
+                (
+                    &SmallScene::<5, 2>::new(&params, &geometry),
+                    &compiled::<5, 2, { constant_words(5, 2) }>(&params, &geometry),
+                    SmallScene::<5, 2>::fits(&params, &geometry),
+                )
             } else if walls <= 5 {
-                (&SmallScene::<5, 8>::new(&params, &geometry), SmallScene::<5, 8>::fits(&params, &geometry))
+                (
+                    &SmallScene::<5, 8>::new(&params, &geometry),
+                    &compiled::<5, 8, { constant_words(5, 8) }>(&params, &geometry),
+                    SmallScene::<5, 8>::fits(&params, &geometry),
+                )
             } else {
-                (&SmallScene::<8, 8>::new(&params, &geometry), SmallScene::<8, 8>::fits(&params, &geometry))
+                (
+                    &SmallScene::<8, 8>::new(&params, &geometry),
+                    &compiled::<8, 8, { constant_words(8, 8) }>(&params, &geometry),
+                    SmallScene::<8, 8>::fits(&params, &geometry),
+                )
             };
             let shadow_walls = ShadowWalls::new(&params, &geometry);
+            assert_eq!(fits, shadow_walls.is_empty(), "{walls} walls, light at {light}");
             let mut kinds = [0u32; 4];
             let mut seen = [0u32; 4];
+            // Shadow rays that a wall alone blocks.
+            let mut by_walls = 0;
             for i in 0..4000 {
                 let mut r = || rng.next_f32();
                 let (origin, skip) = if i % 2 == 0 || walls == 0 {
@@ -567,26 +683,33 @@ mod tests {
                 let s = (1.0 - z * z).max(0.0).sqrt();
                 let ray = Ray { origin, dir: Vec3::new(s * phi.cos(), s * phi.sin(), z) };
                 let want = closest_hit(&ray, &params, &geometry, skip, f32::MAX);
-                let got = small.closest_hit(&ray, &params, skip, f32::MAX);
-                assert_eq!((got.t, got.kind, got.index), (want.t, want.kind, want.index), "{walls} walls, ray {i}");
+                for small in [buffers, compiled] {
+                    let got = small.closest_hit(&ray, &params, skip, f32::MAX);
+                    assert_eq!((got.t, got.kind, got.index), (want.t, want.kind, want.index), "{walls} walls, ray {i}");
+                    if want.kind == HitKind::Wall || want.kind == HitKind::Sphere {
+                        // The shading data, picked from the copy, is the scene's own.
+                        let (a, b) = (small.surface(&got, &ray), geometry.surface(&want, &ray));
+                        assert_eq!(
+                            (a.point, a.normal, a.albedo, a.magnitude, a.wall),
+                            (b.point, b.normal, b.albedo, b.magnitude, b.wall),
+                            "{walls} walls, ray {i}"
+                        );
+                    }
+                }
                 kinds[want.kind as usize] += 1;
                 if want.kind == HitKind::Wall || want.kind == HitKind::Sphere {
-                    // The shading data, picked from the copy, is the scene's own.
-                    let (a, b) = (small.surface(&got, &ray), geometry.surface(&want, &ray));
-                    assert_eq!(
-                        (a.point, a.normal, a.albedo, a.magnitude, a.wall),
-                        (b.point, b.normal, b.albedo, b.magnitude, b.wall),
-                        "{walls} walls, ray {i}"
-                    );
                     seen[want.kind as usize] |= 1 << want.index;
                 }
+                let (dir, dist) = light_cone(&params.light, origin).sample(r(), r());
+                let shadow = Ray { origin, dir };
+                let want = geometry.occluded(&shadow, &params, &shadow_walls, skip, dist);
+                assert_eq!(compiled.occluded(&shadow, &params, &shadow_walls, skip, dist), want, "shadow ray {i}");
+                let spheres_alone = buffers.occluded(&shadow, &params, &shadow_walls, skip, dist);
                 if fits {
-                    let (dir, dist) = light_cone(&params.light, origin).sample(r(), r());
-                    let shadow = Ray { origin, dir };
-                    let want = geometry.occluded(&shadow, &params, &shadow_walls, skip, dist);
-                    assert_eq!(small.occluded(&shadow, &params, &shadow_walls, skip, dist), want, "shadow ray {i}");
-                    shadow_rays = (shadow_rays.0 + 1, shadow_rays.1 + want as u32);
+                    assert_eq!(spheres_alone, want, "shadow ray {i}");
                 }
+                by_walls += (want && !spheres_alone) as u32;
+                shadow_rays = (shadow_rays.0 + 1, shadow_rays.1 + want as u32);
             }
             // Every kind of hit the scene has was met.
             assert!(kinds[HitKind::Light as usize] > 0 && (walls == 0 || kinds[HitKind::Wall as usize] > 0));
@@ -594,6 +717,9 @@ mod tests {
             // Every wall and sphere was hit, so each index's pick was checked.
             assert_eq!(seen[HitKind::Wall as usize], (1 << walls) - 1, "walls hit");
             assert_eq!(seen[HitKind::Sphere as usize], (1 << spheres) - 1, "spheres hit");
+            // Where walls can block the light, some shadow rays are blocked
+            // by walls alone: the compiled form's wall tests were needed.
+            assert_eq!(by_walls > 20, !fits, "{walls} walls, light at {light}: {by_walls} blocked by walls alone");
         }
         // Some shadow rays were blocked, most not.
         assert!(shadow_rays.1 > 100 && shadow_rays.1 < shadow_rays.0 / 2, "{shadow_rays:?}");

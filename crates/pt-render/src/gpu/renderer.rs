@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use pt_core::small_scene::{SMALL_SCENE_SIZES, scene_constants, smallest_fit};
+use pt_core::small_scene::{SMALL_SCENE_SIZES, scene_constants, smallest_fit, smallest_fit_compiled};
 use pt_core::{AccumPixel, FrameParams, Geometry, Sphere, Tile, WORKGROUP_SIZE, Wall};
 use wgpu::util::DeviceExt;
 
@@ -40,6 +40,9 @@ pub struct GpuRenderer {
     /// `smallest_fit` of the current scene and light: worked out when they
     /// change, not every frame.
     small_fit: Option<usize>,
+    /// `smallest_fit_compiled` of them: the capacity a specialized
+    /// pipeline takes, which also holds walls that can block the light.
+    compiled_fit: Option<usize>,
     /// Whether the small-scene pipeline is specialized to the scene
     /// (`TraceKernel::Specialized`).
     specialize: bool,
@@ -141,6 +144,7 @@ impl GpuRenderer {
             display_group,
             params,
             small_fit: smallest_fit(&params, &geometry),
+            compiled_fit: smallest_fit_compiled(&params, &geometry),
             geometry,
             accumulate_small: None,
             specialize: false,
@@ -195,8 +199,7 @@ impl GpuRenderer {
             self.samples_done = 0;
         }
         self.params = params;
-        self.small_fit = smallest_fit(&self.params, &self.geometry);
-        self.specialize_pipeline();
+        self.refit();
         Ok(())
     }
 
@@ -207,15 +210,22 @@ impl GpuRenderer {
         self.queue.write_buffer(&self.geometry_buf, 0, bytemuck::bytes_of(&*self.geometry));
         self.params.wall_count = walls.len() as u32;
         self.params.sphere_count = spheres.len() as u32;
-        self.small_fit = smallest_fit(&self.params, &self.geometry);
-        self.specialize_pipeline();
+        self.refit();
         Ok(())
     }
 
+    /// The capacities that hold the current scene and light, and the
+    /// specialized pipeline for them.
+    fn refit(&mut self) {
+        self.small_fit = smallest_fit(&self.params, &self.geometry);
+        self.compiled_fit = smallest_fit_compiled(&self.params, &self.geometry);
+        self.specialize_pipeline();
+    }
+
     /// The specialized small-scene pipeline for the current scene, settings
-    /// and strategy, where one is chosen and the scene fits.
+    /// and strategy, where one is chosen and the scene fits it compiled in.
     fn specialize_pipeline(&mut self) {
-        let (Some(size), Some(kernels), true) = (self.small_fit, &self.accumulate_small, self.specialize) else {
+        let (Some(size), Some(kernels), true) = (self.compiled_fit, &self.accumulate_small, self.specialize) else {
             self.specialized = None;
             return;
         };
@@ -314,17 +324,20 @@ impl GpuRenderer {
         }
     }
 
-    /// The notice for a user whose scene the small-scene kernel cannot
-    /// trace on an adapter where it is the default
-    /// ([`super::kernel::small_scene_misfit`] says why); `None` elsewhere.
-    pub fn general_kernel_notice(ctx: &GpuContext, scene: &Scene) -> Option<String> {
-        if Self::default_trace_kernel(ctx) == TraceKernel::General {
+    /// The notice for a user whose scene a renderer asking for `kernel`
+    /// (the adapter's default, or its unspecialized form in the viewer)
+    /// traces with the general kernel instead
+    /// ([`super::kernel::small_scene_misfit`] says why); `None` where
+    /// `kernel` is the general one or the scene fits.
+    pub fn general_kernel_notice(scene: &Scene, kernel: TraceKernel) -> Option<String> {
+        if kernel == TraceKernel::General {
             return None;
         }
         // The fit depends on the counts, the walls and the light only: no
         // flags (whose defaults take a pass over the scene) are worked out.
         let params = scene.frame_params_with_flags(&scene.render, 1, 0, 0);
-        let why = super::kernel::small_scene_misfit(&params, &scene.geometry().ok()?)?;
+        let compiled_in = kernel == TraceKernel::Specialized;
+        let why = super::kernel::small_scene_misfit(&params, &scene.geometry().ok()?, compiled_in)?;
         Some(format!("note: the general kernel traces this scene, several times slower on this adapter: {why}"))
     }
 
@@ -344,7 +357,8 @@ impl GpuRenderer {
 
     /// The small-scene pipeline the next frame runs, if any: where the
     /// small-scene kernel is chosen, the smallest capacity that holds the
-    /// scene, specialized to it where that is chosen and could be made.
+    /// scene, specialized to it where that is chosen and could be made
+    /// (else reading the buffers, where the scene fits that form).
     fn small_pipeline(&self) -> Option<&wgpu::ComputePipeline> {
         if let Some(pipeline) = &self.specialized {
             return Some(pipeline);
