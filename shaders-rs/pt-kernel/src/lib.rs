@@ -142,7 +142,8 @@ accumulate_entry!(accumulate, 8, 8);
 accumulate_entry!(accumulate_16x4_groups, 16, 4);
 accumulate_entry!(accumulate_32x2_groups, 32, 2);
 accumulate_entry!(accumulate_4x4_groups, 4, 4);
-// For scenes that `SmallScene::fits`, one per capacity in
+// For scenes that `SmallScene::fits` (or, with the scene compiled in as
+// specialization constants, `SmallScene::fits_compiled`), one per capacity in
 // `small_scene::SMALL_SCENE_SIZES`, sampler (`integrator::SamplerKind`, in
 // its order) and code compiled in (`kernel::SmallVariant` in pt-render):
 // the connections' and the glow lobe's; the glow lobe's alone
