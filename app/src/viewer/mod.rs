@@ -158,10 +158,7 @@ impl Viewer {
         if let Some(b) = args.max_bounces {
             scene.render.max_bounces = b;
         }
-        // The viewer's renderer does not compile the scene in (an edit would
-        // wait for a pipeline): `Session` asks for the unspecialized form.
-        let kernel = GpuRenderer::default_trace_kernel(&ctx).unspecialized();
-        if let Some(notice) = GpuRenderer::general_kernel_notice(&scene, kernel) {
+        if let Some(notice) = GpuRenderer::general_kernel_notice(&scene, Session::trace_kernel(&ctx)) {
             eprintln!("{notice}");
         }
         let scene_path = args.scene_path.as_ref().map_or("scene.toml".to_owned(), |p| p.display().to_string());

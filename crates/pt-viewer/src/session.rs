@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 use egui::{Event, Key, MouseWheelUnit, Sense};
-use pt_render::gpu::{Blit, GpuTimer, PendingRead};
+use pt_render::gpu::{Blit, GpuTimer, PendingRead, TraceKernel};
 use pt_render::scene::CameraDesc;
 use pt_render::{GpuContext, GpuError, GpuRenderer, Scene, SceneError};
 
@@ -73,6 +73,14 @@ pub struct Session {
 }
 
 impl Session {
+    /// The trace kernel a session asks for on `ctx`: the adapter's default,
+    /// unspecialized. Every edit changes the scene, and a pipeline
+    /// specialized to it would be made again at each (half a second and
+    /// more on lavapipe).
+    pub fn trace_kernel(ctx: &GpuContext) -> TraceKernel {
+        GpuRenderer::default_trace_kernel(ctx).unspecialized()
+    }
+
     /// A session on `scene`, traced at `width` x `height` until the first
     /// frame lays the image out, drawn into targets of `target_format`.
     pub fn new(
@@ -84,9 +92,7 @@ impl Session {
         waiting: Waiting,
     ) -> Result<Self, GpuError> {
         let settings = ViewSettings::new(scene, width.max(1), height.max(1));
-        // Every edit changes the scene: a pipeline specialized to it would
-        // be made again at each (half a second and more on lavapipe).
-        let kernel = GpuRenderer::default_trace_kernel(ctx).unspecialized();
+        let kernel = Self::trace_kernel(ctx);
         let (walls, spheres) = (settings.scene.gpu_walls(), settings.scene.gpu_spheres());
         let renderer = GpuRenderer::with_trace_kernel(ctx, settings.frame_params(), &walls, &spheres, kernel)?;
         let blit = Blit::new(ctx, target_format);
