@@ -611,6 +611,16 @@ mod tests {
         assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 8))));
     }
 
+    /// Capacity `(W, S)`'s copy read from the buffers and compiled in, and
+    /// whether the scene fits the first form.
+    fn forms<const W: u32, const S: u32, const N: usize>(
+        params: &FrameParams,
+        geometry: &Geometry,
+    ) -> (Box<dyn SceneView>, Box<dyn SceneView>, bool) {
+        let buffers = SmallScene::<W, S>::new(params, geometry);
+        (Box::new(buffers), Box::new(compiled::<W, S, N>(params, geometry)), SmallScene::<W, S>::fits(params, geometry))
+    }
+
     /// Rays from random points in the room in random directions, and from
     /// points on its surfaces (leaving their wall): the copy finds exactly
     /// the hit that the uniform block's loops find, for every count of
@@ -624,45 +634,21 @@ mod tests {
         let mut rng = Rng::new(9, 8, 7, 6, 5);
         let mut shadow_rays = (0, 0);
         let behind_the_back_wall = Vec3::new(0.0, 1.0, -1.6);
-        let cases = [
-            (0, 0, LIGHT),
-            (3, 1, LIGHT),
-            (5, 2, LIGHT),
-            (5, 3, LIGHT),
-            (5, 8, LIGHT),
-            (6, 4, LIGHT),
-            (8, 3, LIGHT),
-            (8, 8, LIGHT),
-            (7, 2, LIGHT),
-            (5, 2, THROUGH_CEILING),
-            (5, 6, THROUGH_CEILING),
-            (6, 2, THROUGH_CEILING),
-            (5, 2, behind_the_back_wall),
-        ];
-        for (walls, spheres, light) in cases {
+        let inside =
+            [(0, 0), (3, 1), (5, 2), (5, 3), (5, 8), (6, 4), (8, 3), (8, 8), (7, 2)].map(|(w, s)| (w, s, LIGHT));
+        let through = [(5, 2), (5, 6), (6, 2)].map(|(w, s)| (w, s, THROUGH_CEILING));
+        for (walls, spheres, light) in inside.into_iter().chain(through).chain([(5, 2, behind_the_back_wall)]) {
             let (params, geometry) = scene(walls, spheres, light);
             // The smallest capacity that holds the counts, as the renderer
-            // picks (the first five walls of `scene` are the box's), read
-            // from the buffers and compiled in.
-            let (buffers, compiled, fits): (&dyn SceneView, &dyn SceneView, bool) = if walls <= 5 && spheres <= 2 {
-                (
-                    &SmallScene::<5, 2>::new(&params, &geometry),
-                    &compiled::<5, 2, { constant_words(5, 2) }>(&params, &geometry),
-                    SmallScene::<5, 2>::fits(&params, &geometry),
-                )
+            // picks (the first five walls of `scene` are the box's).
+            let (buffers, compiled, fits) = if walls <= 5 && spheres <= 2 {
+                forms::<5, 2, { constant_words(5, 2) }>(&params, &geometry)
             } else if walls <= 5 {
-                (
-                    &SmallScene::<5, 8>::new(&params, &geometry),
-                    &compiled::<5, 8, { constant_words(5, 8) }>(&params, &geometry),
-                    SmallScene::<5, 8>::fits(&params, &geometry),
-                )
+                forms::<5, 8, { constant_words(5, 8) }>(&params, &geometry)
             } else {
-                (
-                    &SmallScene::<8, 8>::new(&params, &geometry),
-                    &compiled::<8, 8, { constant_words(8, 8) }>(&params, &geometry),
-                    SmallScene::<8, 8>::fits(&params, &geometry),
-                )
+                forms::<8, 8, { constant_words(8, 8) }>(&params, &geometry)
             };
+            let (buffers, compiled) = (&*buffers, &*compiled);
             let shadow_walls = ShadowWalls::new(&params, &geometry);
             assert_eq!(fits, shadow_walls.is_empty(), "{walls} walls, light at {light}");
             let mut kinds = [0u32; 4];
