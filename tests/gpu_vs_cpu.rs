@@ -185,10 +185,11 @@ fn set_geometry_renders_the_new_scene() {
     assert_ne!(means(&got), means(&render_gpu(&ctx, &before, &settings, 8, 7)));
 }
 
-/// The default scene with six more spheres, hung where nothing else is:
-/// the box capacity with eight spheres; with `box_order` false, the side
-/// walls first, which takes the capacity of eight walls of any direction.
-fn eight_spheres(box_order: bool) -> Scene {
+/// The default scene with `extra` more spheres (at most 12), hung where
+/// nothing else is: with six, the box capacity with eight spheres; with
+/// more, or with `box_order` false (the side walls first), the capacity of
+/// eight walls of any direction and sixteen spheres.
+fn more_spheres(extra: usize, box_order: bool) -> Scene {
     let mut scene = Scene::default_scene();
     let spots = [
         (Vec3::new(0.3, 1.2, -0.5), 0.2),
@@ -197,9 +198,15 @@ fn eight_spheres(box_order: bool) -> Scene {
         (Vec3::new(-0.1, 0.9, -0.8), 0.15),
         (Vec3::new(-0.7, 1.7, -0.7), 0.15),
         (Vec3::new(0.0, 0.2, 0.75), 0.15),
+        (Vec3::new(0.75, 0.15, -0.75), 0.12),
+        (Vec3::new(-0.8, 0.12, 0.8), 0.1),
+        (Vec3::new(0.4, 1.5, 0.5), 0.1),
+        (Vec3::new(-0.4, 1.4, -0.1), 0.1),
+        (Vec3::new(0.8, 1.8, -0.2), 0.1),
+        (Vec3::new(-0.88, 0.75, 0.0), 0.1),
     ];
-    for (k, (center, radius)) in spots.into_iter().enumerate() {
-        let sphere = pt_core::Sphere::new(center, radius, Vec3::new(0.9, 0.1 + 0.1 * k as f32, 0.1));
+    for (k, (center, radius)) in spots.into_iter().take(extra).enumerate() {
+        let sphere = pt_core::Sphere::new(center, radius, Vec3::new(0.9, 0.1 + 0.06 * k as f32, 0.1));
         scene.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
     }
     if !box_order {
@@ -209,10 +216,11 @@ fn eight_spheres(box_order: bool) -> Scene {
 }
 
 /// The scenes the small-scene tests run, one per capacity, each checked
-/// to take it: the default scene, and `eight_spheres` in both wall orders.
+/// to take it: the default scene, eight spheres in the box, and fourteen
+/// with the side walls first.
 fn one_scene_per_capacity() -> Vec<Scene> {
     use pt_core::small_scene::{SMALL_SCENE_SIZES, smallest_fit};
-    let scenes = vec![Scene::default_scene(), eight_spheres(true), eight_spheres(false)];
+    let scenes = vec![Scene::default_scene(), more_spheres(6, true), more_spheres(12, false)];
     for (i, scene) in scenes.iter().enumerate() {
         let settings = RenderSettings { width: 8, height: 8, ..scene.render };
         let geometry = scene.geometry().unwrap();
@@ -372,26 +380,27 @@ fn a_specialized_renderer_follows_a_changed_scene() {
     assert!(close_per_mille(&changed, &first, 1e-4) < 500, "the change shows");
 }
 
-/// A scene the small-scene kernel cannot render exactly (a ninth sphere,
+/// A scene the small-scene kernel cannot render exactly (a 17th sphere,
 /// or, read from the buffers, a panel that can shadow the light) runs on
 /// the general kernel even where the small one is chosen, and renders what
 /// the general kernel renders.
 #[test]
 fn scenes_that_do_not_fit_run_on_the_general_kernel() {
     let ctx = gpu();
-    let mut nine_spheres = Scene::default_scene();
-    for k in 0..7 {
-        let sphere = pt_core::Sphere::new(Vec3::new(-0.75 + 0.25 * k as f32, 1.2, 0.6), 0.08, Vec3::splat(0.5));
-        nine_spheres.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
+    let mut too_many = Scene::default_scene();
+    for k in 0..15 {
+        let at = Vec3::new(-0.75 + 0.25 * (k % 7) as f32, 1.2, 0.6 - 0.25 * (k / 7) as f32);
+        let sphere = pt_core::Sphere::new(at, 0.08, Vec3::splat(0.5));
+        too_many.spheres.push(pt_render::scene::NamedSphere { name: format!("extra {k}"), sphere });
     }
     // Where the small-scene kernel is the adapter's default (lavapipe, where
     // CI runs this), the user is told why a scene does not get it.
     let default = GpuRenderer::default_trace_kernel(&ctx);
     assert_eq!(GpuRenderer::general_kernel_notice(&Scene::default_scene(), default), None);
-    let notice = GpuRenderer::general_kernel_notice(&nine_spheres, default);
+    let notice = GpuRenderer::general_kernel_notice(&too_many, default);
     let small_default = default != TraceKernel::General;
-    assert_eq!(notice.is_some_and(|n| n.ends_with("9 spheres (the small-scene kernel holds 8)")), small_default);
-    for (scene, kernel) in [(&nine_spheres, TraceKernel::Specialized), (&panel(), TraceKernel::SmallScene)] {
+    assert_eq!(notice.is_some_and(|n| n.ends_with("17 spheres (the small-scene kernel holds 16)")), small_default);
+    for (scene, kernel) in [(&too_many, TraceKernel::Specialized), (&panel(), TraceKernel::SmallScene)] {
         let (used, fallback) = render_with(&ctx, scene, kernel);
         assert_eq!(used, TraceKernel::General);
         assert_eq!(fallback, render_with(&ctx, scene, TraceKernel::General).1);

@@ -300,7 +300,7 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          density 1 / (1 - cos); `GLOW_PROBABILITY` and `GLOW_REACH` in pt-core; probability 0.1 around large \
          lights and in bright rooms, `FLAG_GLOW_SPARSE`), whose density falls as the inverse square of the \
          distance from the light, as the irradiance of surfaces around it does.\n\
-         - Trace kernel: the small-scene kernel for scenes it holds (at most 8 walls and 8 spheres, and no \
+         - Trace kernel: the small-scene kernel for scenes it holds (at most 8 walls and 16 spheres, and no \
          wall that can block a shadow ray: the default scene is one) on software adapters (lavapipe, \
          SwiftShader), with the scene compiled in for `render` and `bench` (the viewer, whose scene changes as \
          it is edited, reads it from buffers), and on NVIDIA GPUs; the general kernel for other scenes and \

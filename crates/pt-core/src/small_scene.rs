@@ -52,15 +52,17 @@ use spirv_std::glam::Vec3;
 /// The capacities (walls, spheres besides the light) the kernel has a
 /// small-scene entry point for, smallest first: a box room's five walls
 /// ([`BOX_AXES`]: the default scene's) with two spheres, the same box with
-/// up to eight, and any closed room of up to eight walls and eight spheres.
+/// up to eight, and any closed room of up to eight walls and sixteen
+/// spheres.
 ///
 /// Why more than one: where the scene is not compiled into the pipeline
 /// (the viewer, whose scene is edited), every slot past the scene's count
 /// still costs its masked test, 2 to 3% of the time each; where it is
-/// compiled in, the driver drops those slots. Why eight spheres: a scene
+/// compiled in, the driver drops those slots. Why sixteen spheres: a scene
 /// that fits no capacity takes the general loops, which lavapipe runs
-/// several times slower (docs/ARCHITECTURE.md has the figures).
-pub const SMALL_SCENE_SIZES: [(u32, u32); 3] = [(5, 2), (5, 8), (8, 8)];
+/// several times slower (docs/ARCHITECTURE.md has the figures); the last
+/// capacity's extra slots cost only the viewer's rooms that are no box.
+pub const SMALL_SCENE_SIZES: [(u32, u32); 3] = [(5, 2), (5, 8), (8, 16)];
 
 /// The axis of the normal (0 x, 1 y, 2 z) of each wall slot of the box
 /// capacities, `SMALL_SCENE_SIZES[0]` and `[1]`: floor and ceiling, back
@@ -97,18 +99,18 @@ fn walls_fit_the_box(params: &FrameParams, geometry: &Geometry) -> bool {
 
 /// The largest capacity, which the copy is made for.
 const MAX_WALLS: u32 = 8;
-const MAX_SPHERES: u32 = 8;
+const MAX_SPHERES: u32 = 16;
 
-/// Calls `f(0)`, `f(1)`, ..., `f(N - 1)` (N at most 8), each with a literal
+/// Calls `f(0)`, `f(1)`, ..., `f(N - 1)` (N at most 16), each with a literal
 /// index: once inlined, every read of the copy has a constant offset, and
 /// the driver keeps the copy in registers instead of indexing memory.
 #[inline(always)]
 fn unrolled<const N: u32>(mut f: impl FnMut(u32)) {
-    const { assert!(N <= 8) };
+    const { assert!(N <= 16) };
     macro_rules! calls {
         ($($k:literal)*) => { $( if N > $k { f($k); } )* };
     }
-    calls!(0 1 2 3 4 5 6 7);
+    calls!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
 }
 
 /// `items[index]` for an index below `N`, read at constant indices only
@@ -124,7 +126,7 @@ fn pick<T: Copy, const N: u32, const L: usize>(items: &[T; L], index: u32) -> T 
     item
 }
 
-/// The first `W` walls and `S` spheres of a scene (each at most 8), with
+/// The first `W` walls and `S` spheres of a scene (at most 8 and 16), with
 /// the counts in use. Built once per pixel and frame.
 pub struct SmallScene<const W: u32, const S: u32> {
     /// Slots past `W` and `S` are never read, and the compiler drops them.
@@ -192,7 +194,9 @@ impl<const W: u32, const S: u32> SmallScene<W, S> {
         let s = &geometry.spheres;
         Self {
             walls: [w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]],
-            spheres: [s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]],
+            spheres: [
+                s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], s[11], s[12], s[13], s[14], s[15],
+            ],
             wall_count: params.wall_count.min(W),
             sphere_count: params.sphere_count.min(S),
             shadow_walls: 0,
@@ -424,7 +428,7 @@ mod tests {
     use spirv_std::glam::Vec3;
 
     /// Up to 8 walls: the default room (floor, ceiling, back, left, right),
-    /// a front wall and two panels inside; up to 8 spheres.
+    /// a front wall and two panels inside; up to 16 spheres.
     fn scene(walls: usize, spheres: usize, light: Vec3) -> (FrameParams, Geometry) {
         let v = Vec3::new;
         let a = Vec3::splat(0.73);
@@ -448,6 +452,14 @@ mod tests {
             Sphere::new(v(-0.7, 1.7, -0.7), 0.18, a),
             Sphere::new(v(0.65, 0.9, 0.65), 0.15, a),
             Sphere::new(v(-0.1, 1.0, -0.75), 0.15, a),
+            Sphere::new(v(0.7, 0.2, -0.7), 0.15, a),
+            Sphere::new(v(-0.75, 0.15, 0.75), 0.12, a),
+            Sphere::new(v(0.3, 1.2, 0.2), 0.1, a),
+            Sphere::new(v(-0.3, 1.5, 0.1), 0.12, a),
+            Sphere::new(v(0.8, 1.8, 0.1), 0.12, a),
+            Sphere::new(v(-0.8, 0.8, -0.1), 0.12, a),
+            Sphere::new(v(0.1, 0.6, -0.2), 0.12, a),
+            Sphere::new(v(0.35, 0.1, -0.1), 0.1, a),
         ];
         // Each object its own albedo, so that shading data read from the
         // wrong one shows.
@@ -455,7 +467,7 @@ mod tests {
             w.albedo = Vec3::new(0.1 * k as f32, 0.5, 0.9);
         }
         for (k, s) in all_spheres.iter_mut().enumerate() {
-            s.albedo = Vec3::new(0.9, 0.1 * k as f32, 0.5);
+            s.albedo = Vec3::new(0.9, 0.05 * k as f32, 0.5);
         }
         let geometry = Geometry::new(&all_walls[..walls], &all_spheres[..spheres]).unwrap();
         let params = FrameParams {
@@ -486,10 +498,11 @@ mod tests {
     fn fits_a_room_with_the_light_inside_and_nothing_more() {
         let fits = |walls, spheres, light| {
             let (params, geometry) = scene(walls, spheres, light);
-            SmallScene::<8, 8>::fits(&params, &geometry)
+            SmallScene::<8, 16>::fits(&params, &geometry)
         };
         assert!(fits(5, 2, LIGHT), "the default scene");
         assert!(fits(6, 8, LIGHT), "a closed room, eight spheres");
+        assert!(fits(5, 16, LIGHT), "the box, sixteen spheres");
         assert!(!fits(7, 2, LIGHT), "a panel inside the room can shadow the light");
         assert!(!fits(5, 2, Vec3::new(0.0, 1.0, -1.6)), "the back wall is between the light and the room");
         let (mut params, geometry) = scene(5, 2, LIGHT);
@@ -497,14 +510,16 @@ mod tests {
         params.sphere_count = 3;
         assert!(!SmallScene::<5, 2>::fits(&params, &geometry));
         assert!(SmallScene::<5, 8>::fits(&params, &geometry));
-        assert!(SmallScene::<8, 8>::fits(&params, &geometry));
+        assert!(SmallScene::<8, 16>::fits(&params, &geometry));
         params.sphere_count = 9;
         assert!(!SmallScene::<5, 8>::fits(&params, &geometry));
-        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
-        assert_eq!(smallest_fit(&params, &geometry), None, "nine spheres: the general loops");
+        assert!(SmallScene::<8, 16>::fits(&params, &geometry));
+        params.sphere_count = 17;
+        assert!(!SmallScene::<8, 16>::fits(&params, &geometry));
+        assert_eq!(smallest_fit(&params, &geometry), None, "seventeen spheres: the general loops");
         params.sphere_count = 2;
         params.wall_count = 9;
-        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
+        assert!(!SmallScene::<8, 16>::fits(&params, &geometry));
         // The renderer's choice: the smallest capacity that fits.
         let choice = |walls, spheres, light| {
             let (params, geometry) = scene(walls, spheres, light);
@@ -513,8 +528,10 @@ mod tests {
         assert_eq!(choice(5, 2, LIGHT), Some((5, 2)));
         assert_eq!(choice(5, 3, LIGHT), Some((5, 8)), "the box, more spheres");
         assert_eq!(choice(5, 8, LIGHT), Some((5, 8)));
-        assert_eq!(choice(6, 0, LIGHT), Some((8, 8)));
-        assert_eq!(choice(6, 8, LIGHT), Some((8, 8)));
+        assert_eq!(choice(5, 9, LIGHT), Some((8, 16)), "the box, more spheres than its forms hold");
+        assert_eq!(choice(5, 16, LIGHT), Some((8, 16)));
+        assert_eq!(choice(6, 0, LIGHT), Some((8, 16)));
+        assert_eq!(choice(6, 16, LIGHT), Some((8, 16)));
         assert_eq!(choice(7, 2, LIGHT), None);
         assert_eq!(choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), None);
         assert_eq!(choice(5, 2, THROUGH_CEILING), None);
@@ -527,13 +544,14 @@ mod tests {
         assert_eq!(compiled_choice(5, 2, THROUGH_CEILING), Some((5, 2)));
         assert_eq!(compiled_choice(5, 2, Vec3::new(0.0, 1.0, -1.6)), Some((5, 2)));
         assert_eq!(compiled_choice(5, 5, THROUGH_CEILING), Some((5, 8)));
-        assert_eq!(compiled_choice(7, 2, LIGHT), Some((8, 8)), "a panel inside the room");
-        let (mut params, geometry) = scene(5, 8, THROUGH_CEILING);
-        params.sphere_count = 9;
-        assert_eq!(smallest_fit_compiled(&params, &geometry), None, "nine spheres");
+        assert_eq!(compiled_choice(7, 2, LIGHT), Some((8, 16)), "a panel inside the room");
+        assert_eq!(compiled_choice(5, 12, THROUGH_CEILING), Some((8, 16)));
+        let (mut params, geometry) = scene(5, 16, THROUGH_CEILING);
+        params.sphere_count = 17;
+        assert_eq!(smallest_fit_compiled(&params, &geometry), None, "seventeen spheres");
         let (params, geometry) = scene(7, 2, THROUGH_CEILING);
-        assert!(SmallScene::<8, 8>::fits_compiled(&params, &geometry));
-        assert!(!SmallScene::<8, 8>::fits(&params, &geometry));
+        assert!(SmallScene::<8, 16>::fits_compiled(&params, &geometry));
+        assert!(!SmallScene::<8, 16>::fits(&params, &geometry));
         assert!(!SmallScene::<5, 8>::fits_compiled(&params, &geometry), "seven walls");
     }
 
@@ -571,11 +589,12 @@ mod tests {
         check::<5, 2, { constant_words(5, 2) }>(5, 2);
         check::<5, 8, { constant_words(5, 8) }>(5, 8);
         check::<5, 8, { constant_words(5, 8) }>(5, 3);
-        check::<8, 8, { constant_words(8, 8) }>(8, 8);
-        check::<8, 8, { constant_words(8, 8) }>(6, 3);
+        check::<8, 16, { constant_words(8, 16) }>(8, 16);
+        check::<8, 16, { constant_words(8, 16) }>(6, 3);
+        check::<8, 16, { constant_words(8, 16) }>(5, 11);
         // The walls that can block the light: the two panels of 8 walls.
         let (params, geometry) = scene(8, 8, LIGHT);
-        assert_eq!(compiled::<8, 8, { constant_words(8, 8) }>(&params, &geometry).shadow_walls, 0b1100_0000);
+        assert_eq!(compiled::<8, 16, { constant_words(8, 16) }>(&params, &geometry).shadow_walls, 0b1100_0000);
     }
 
     #[test]
@@ -600,7 +619,7 @@ mod tests {
         assert_eq!(with_walls(&[floor, ceiling, back]), (true, Some((5, 2))), "the first slots");
         // The side walls first: the slots' axes differ, the capacity of
         // eight walls (every wall tested in full) takes the scene.
-        assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 8))));
+        assert_eq!(with_walls(&[left, right, back, floor, ceiling]), (false, Some((8, 16))));
         // A floor whose edges are turned in its plane is still on its axis;
         // a tilted ceiling is not.
         let turned =
@@ -608,7 +627,7 @@ mod tests {
         assert_eq!(with_walls(&[turned, ceiling, back, left, right]), (true, Some((5, 2))));
         let tilted =
             Wall::new(ceiling.corner, ceiling.edge_u, ceiling.edge_v + Vec3::new(0.0, 0.01, 0.0), ceiling.albedo);
-        assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 8))));
+        assert_eq!(with_walls(&[floor, tilted, back, left, right]), (false, Some((8, 16))));
     }
 
     /// Capacity `(W, S)`'s copy read from the buffers and compiled in, and
@@ -634,19 +653,19 @@ mod tests {
         let mut rng = Rng::new(9, 8, 7, 6, 5);
         let mut shadow_rays = (0, 0);
         let behind_the_back_wall = Vec3::new(0.0, 1.0, -1.6);
-        let inside =
-            [(0, 0), (3, 1), (5, 2), (5, 3), (5, 8), (6, 4), (8, 3), (8, 8), (7, 2)].map(|(w, s)| (w, s, LIGHT));
-        let through = [(5, 2), (5, 6), (6, 2)].map(|(w, s)| (w, s, THROUGH_CEILING));
+        let inside = [(0, 0), (3, 1), (5, 2), (5, 3), (5, 8), (5, 9), (6, 4), (8, 3), (8, 8), (6, 16), (7, 2)]
+            .map(|(w, s)| (w, s, LIGHT));
+        let through = [(5, 2), (5, 6), (5, 13), (6, 2)].map(|(w, s)| (w, s, THROUGH_CEILING));
         for (walls, spheres, light) in inside.into_iter().chain(through).chain([(5, 2, behind_the_back_wall)]) {
             let (params, geometry) = scene(walls, spheres, light);
             // The smallest capacity that holds the counts, as the renderer
             // picks (the first five walls of `scene` are the box's).
             let (buffers, compiled, fits) = if walls <= 5 && spheres <= 2 {
                 forms::<5, 2, { constant_words(5, 2) }>(&params, &geometry)
-            } else if walls <= 5 {
+            } else if walls <= 5 && spheres <= 8 {
                 forms::<5, 8, { constant_words(5, 8) }>(&params, &geometry)
             } else {
-                forms::<8, 8, { constant_words(8, 8) }>(&params, &geometry)
+                forms::<8, 16, { constant_words(8, 16) }>(&params, &geometry)
             };
             let (buffers, compiled) = (&*buffers, &*compiled);
             let shadow_walls = ShadowWalls::new(&params, &geometry);

@@ -672,7 +672,7 @@ mod tests {
     #[test]
     fn the_light_edge_control_variate_is_off_where_something_hides_the_lights_rim() {
         let scenes = scene_files(&["", "holdout", "probe", "spheres", "contact"]);
-        assert_eq!(scenes.len(), 36);
+        assert_eq!(scenes.len(), 37);
         for (name, scene) in scenes {
             let hidden = ["low-medium", "light-through-ceiling", "light-in-corner-walls"].contains(&name.as_str());
             assert_eq!(silhouette_in_view(&scene), !hidden, "{name}");

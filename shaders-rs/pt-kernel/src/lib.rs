@@ -282,68 +282,76 @@ small_entries!(
     false,
     false
 );
-small_entries!(accumulate_small_8w_8s_pcg, accumulate_small_8w_8s_pcg_noroulette, Rng, 8, 8, true, true);
+small_entries!(accumulate_small_8w_16s_pcg, accumulate_small_8w_16s_pcg_noroulette, Rng, 8, 16, true, true);
 small_entries!(
-    accumulate_small_8w_8s_pcg_unconnected,
-    accumulate_small_8w_8s_pcg_unconnected_noroulette,
+    accumulate_small_8w_16s_pcg_unconnected,
+    accumulate_small_8w_16s_pcg_unconnected_noroulette,
     Rng,
     8,
-    8,
+    16,
     false,
     true
 );
 small_entries!(
-    accumulate_small_8w_8s_pcg_unconnected_noglow,
-    accumulate_small_8w_8s_pcg_unconnected_noglow_noroulette,
+    accumulate_small_8w_16s_pcg_unconnected_noglow,
+    accumulate_small_8w_16s_pcg_unconnected_noglow_noroulette,
     Rng,
     8,
-    8,
-    false,
-    false
-);
-small_entries!(accumulate_small_8w_8s_sobol, accumulate_small_8w_8s_sobol_noroulette, SobolSampler, 8, 8, true, true);
-small_entries!(
-    accumulate_small_8w_8s_sobol_unconnected,
-    accumulate_small_8w_8s_sobol_unconnected_noroulette,
-    SobolSampler,
-    8,
-    8,
-    false,
-    true
-);
-small_entries!(
-    accumulate_small_8w_8s_sobol_unconnected_noglow,
-    accumulate_small_8w_8s_sobol_unconnected_noglow_noroulette,
-    SobolSampler,
-    8,
-    8,
+    16,
     false,
     false
 );
 small_entries!(
-    accumulate_small_8w_8s_sobol_deep,
-    accumulate_small_8w_8s_sobol_deep_noroulette,
-    SobolDeep,
+    accumulate_small_8w_16s_sobol,
+    accumulate_small_8w_16s_sobol_noroulette,
+    SobolSampler,
     8,
-    8,
+    16,
     true,
     true
 );
 small_entries!(
-    accumulate_small_8w_8s_sobol_deep_unconnected,
-    accumulate_small_8w_8s_sobol_deep_unconnected_noroulette,
-    SobolDeep,
+    accumulate_small_8w_16s_sobol_unconnected,
+    accumulate_small_8w_16s_sobol_unconnected_noroulette,
+    SobolSampler,
     8,
-    8,
+    16,
     false,
     true
 );
 small_entries!(
-    accumulate_small_8w_8s_sobol_deep_unconnected_noglow,
-    accumulate_small_8w_8s_sobol_deep_unconnected_noglow_noroulette,
+    accumulate_small_8w_16s_sobol_unconnected_noglow,
+    accumulate_small_8w_16s_sobol_unconnected_noglow_noroulette,
+    SobolSampler,
+    8,
+    16,
+    false,
+    false
+);
+small_entries!(
+    accumulate_small_8w_16s_sobol_deep,
+    accumulate_small_8w_16s_sobol_deep_noroulette,
     SobolDeep,
     8,
+    16,
+    true,
+    true
+);
+small_entries!(
+    accumulate_small_8w_16s_sobol_deep_unconnected,
+    accumulate_small_8w_16s_sobol_deep_unconnected_noroulette,
+    SobolDeep,
     8,
+    16,
+    false,
+    true
+);
+small_entries!(
+    accumulate_small_8w_16s_sobol_deep_unconnected_noglow,
+    accumulate_small_8w_16s_sobol_deep_unconnected_noglow_noroulette,
+    SobolDeep,
+    8,
+    16,
     false,
     false
 );

@@ -495,7 +495,7 @@ mod tests {
     }
 
     /// The notice names what keeps a scene off the small-scene kernel:
-    /// nothing for a scene of 8 spheres, the count for a ninth, the wall
+    /// nothing for a scene of 16 spheres, the count for a 17th, the wall
     /// for a panel that can shadow the light where the scene is read from
     /// the buffers (compiled in, the kernel holds it). A renderer that asks
     /// for the general kernel gets no notice.
@@ -510,10 +510,11 @@ mod tests {
         };
         let mut scene = Scene::default_scene();
         assert_eq!(misfit(&scene, false), None);
-        for k in 0..7 {
-            let sphere = pt_core::Sphere::new(Vec3::new(-0.75 + 0.25 * k as f32, 1.2, 0.6), 0.08, Vec3::splat(0.5));
+        for k in 0..15 {
+            let at = Vec3::new(-0.75 + 0.25 * (k % 7) as f32, 1.2, 0.6 - 0.25 * (k / 7) as f32);
+            let sphere = pt_core::Sphere::new(at, 0.08, Vec3::splat(0.5));
             scene.spheres.push(NamedSphere { name: format!("extra {k}"), sphere });
-            let want = (k == 6).then(|| "9 spheres (the small-scene kernel holds 8)".to_string());
+            let want = (k == 14).then(|| "17 spheres (the small-scene kernel holds 16)".to_string());
             assert_eq!(misfit(&scene, false), want, "{} spheres", scene.spheres.len());
             assert_eq!(misfit(&scene, true), want, "{} spheres", scene.spheres.len());
         }
@@ -551,8 +552,8 @@ mod tests {
         assert_eq!(entry(deep & !FLAG_GLOW), "accumulate_small_5w_2s_sobol_deep_unconnected_noglow");
         let no_nee = (deep | FLAG_CONNECT) & !FLAG_NEE;
         assert_eq!(
-            small_scene_entry((8, 8), SmallVariant::of(&frame(no_nee))),
-            "accumulate_small_8w_8s_sobol_deep_unconnected"
+            small_scene_entry((8, 16), SmallVariant::of(&frame(no_nee))),
+            "accumulate_small_8w_16s_sobol_deep_unconnected"
         );
         // Roulette from the fifth bounce of five, with NEE and a black
         // background: no path draws a direction at its fifth vertex.

@@ -232,7 +232,7 @@ impl GpuRenderer {
         let constants = match SMALL_SCENE_SIZES[size] {
             (5, 2) => scene_constants::<5, 2>(&self.params, &self.geometry),
             (5, 8) => scene_constants::<5, 8>(&self.params, &self.geometry),
-            (8, 8) => scene_constants::<8, 8>(&self.params, &self.geometry),
+            (8, 16) => scene_constants::<8, 16>(&self.params, &self.geometry),
             _ => unreachable!("one arm per capacity of SMALL_SCENE_SIZES (a GPU test specializes each)"),
         };
         let index = small_scene_index(size, SmallVariant::of(&self.params));
