@@ -448,7 +448,7 @@ fn connection<V: SceneView, C: RayCounter>(
     if facing {
         rays.ray();
     }
-    let hides = crate::sphere::intersect_sphere(light.center, light.radius, &segment, 0.0, dist) < dist;
+    let hides = crate::sphere::sphere_meets_segment(light.center, light.radius, &segment, dist);
     let seen = !hides & !scene.occluded(&segment, params, shadow_walls, hit.index, dist);
     let projected = params.flags & FLAG_NEE_PROJECTED != 0 && cone.above_horizon(ny);
     let (to_light, light_dist) = if projected { cone.sample_projected(ny, v.x, v.y) } else { cone.sample(v.x, v.y) };

@@ -12,7 +12,7 @@ use crate::geometry::{Geometry, MAX_SPHERES, MAX_WALLS};
 use crate::light::SphereLight;
 use crate::params::FrameParams;
 use crate::ray::Ray;
-use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point};
+use crate::sphere::{Sphere, intersect_sphere, sphere_hit_point, sphere_meets_segment};
 use crate::wall::{Wall, intersect_wall};
 
 /// What a ray hit. `u32`-sized: SPIR-V has no 8-bit integers without the
@@ -87,7 +87,7 @@ impl Hit {
 /// Whether `sphere` blocks the shadow ray in (0, `t_max`).
 #[inline]
 pub fn sphere_blocks(sphere: &Sphere, ray: &Ray, t_max: f32) -> bool {
-    intersect_sphere(sphere.center, sphere.radius, ray, 0.0, t_max) < t_max
+    sphere_meets_segment(sphere.center, sphere.radius, ray, t_max)
 }
 
 /// "No limit" for ray parameters: far beyond any scene (positions are

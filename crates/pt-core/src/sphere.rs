@@ -68,6 +68,34 @@ pub fn intersect_sphere(center: Vec3, radius: f32, ray: &Ray, t_min: f32, t_max:
     }
 }
 
+/// Whether the segment from `ray.origin` to `ray.at(t_max)` crosses the
+/// sphere's surface, for a shadow ray (`t_max` > 0, `ray.dir` of unit
+/// length): the answer of `intersect_sphere(.., 0.0, t_max) < t_max` for
+/// about two thirds of its arithmetic, since a shadow ray needs no root.
+/// The segment crosses the surface where its point nearest the centre lies
+/// inside and its two ends do not both lie inside (the sphere is convex).
+/// The nearest point is the foot of the perpendicular (`t = -f.d`, where
+/// `intersect_sphere`'s discriminant is measured, with its precision for far
+/// and tiny spheres) clamped to the segment. A foot before the origin leaves
+/// the origin itself, which a ray spawned off the outside of the surface
+/// holds outside by its offset; a foot past the end leaves the end point.
+/// The ends are tested only for a segment that starts inside (a room that
+/// is a sphere), from `|f + t d|^2 = |f|^2 + t (t - 2 foot)`.
+#[inline]
+pub fn sphere_meets_segment(center: Vec3, radius: f32, ray: &Ray, t_max: f32) -> bool {
+    let f = ray.origin - center;
+    let r2 = radius * radius;
+    // Selects, not `clamp`: a NaN direction gives a NaN foot, whose
+    // comparisons fail, and `clamp` would panic on it in debug builds.
+    let foot = -f.dot(ray.dir);
+    let t = if foot > 0.0 { foot } else { 0.0 };
+    let t = if t < t_max { t } else { t_max };
+    let nearest = f + ray.dir * t;
+    let c = f.dot(f) - r2;
+    let both_inside = c < 0.0 && c + t_max * (t_max - 2.0 * foot) < 0.0;
+    nearest.dot(nearest) < r2 && !both_inside
+}
+
 /// The hit point at `t` re-projected onto the sphere's surface, which
 /// removes most of the rounding error of `o + t d` (pbrt-v4, section 6.8.5).
 pub fn sphere_hit_point(center: Vec3, radius: f32, ray: &Ray, t: f32) -> (Vec3, Vec3) {
@@ -215,7 +243,8 @@ mod tests {
     /// sphere seen from outside, rays spawned at the error-bounded offset
     /// never re-hit it, and shadow rays to points above the surface are
     /// never blocked by it; from inside (a spherical room), a spawned ray
-    /// finds the far side (within 1e-4 r of the f64 root), not its start.
+    /// finds the far side (within 1e-4 r of the f64 root), not its start,
+    /// and a shadow ray to a point inside is not blocked.
     #[test]
     fn spawned_rays_never_rehit_their_sphere_at_any_scale() {
         use crate::ray::offset_origin;
@@ -240,6 +269,7 @@ mod tests {
                     let to = target - origin;
                     let shadow = Ray { origin, dir: to.normalize() };
                     assert!(intersect_sphere(center, s, &shadow, 0.0, to.length()) >= to.length(), "scale {s}");
+                    assert!(!sphere_meets_segment(center, s, &shadow, to.length()), "scale {s}: shadow segment");
                 }
                 let ray = Ray { origin: center + random_dir(&mut rng) * (0.5 * s), dir: random_dir(&mut rng) };
                 let t = intersect_sphere(center, s, &ray, 0.0, f32::MAX);
@@ -249,7 +279,56 @@ mod tests {
                 let far = t_f64(center, s, origin, d).expect("a ray from inside hits the sphere");
                 let t2 = intersect_sphere(center, s, &Ray { origin, dir: d }, 0.0, f32::MAX);
                 assert!((t2 as f64 - far).abs() <= 1e-4 * s as f64, "scale {s}, inside ray {i}: {t2} against {far}");
+                // A shadow ray from there to a point inside crosses nothing.
+                let inside = Ray { origin, dir: d };
+                assert!(!sphere_meets_segment(center, s, &inside, far as f32 * 0.5), "scale {s}, inside shadow {i}");
             }
+        }
+    }
+
+    /// The shadow test against the closest-hit one: 200,000 random segments
+    /// per scale, from origins inside and outside the sphere, aimed at,
+    /// past and beside it, ending before, inside and beyond it, get the
+    /// answer of `intersect_sphere(..) < t_max` and of f64, except where
+    /// the segment's nearest point or an end lies within 1e-5 of the radius
+    /// of the surface (f64), where either answer is a rounding.
+    #[test]
+    fn segment_test_agrees_with_the_closest_hit_test() {
+        use crate::rng::Rng;
+        use crate::test_support::{SCALES, random_dir};
+        for s in SCALES {
+            let mut rng = Rng::new(s.to_bits(), 3, 1, 4, 1);
+            let center = Vec3::new(-0.4, 0.9, 0.6) * s;
+            let (mut blocked, mut both_inside, mut near) = (0, 0, 0);
+            for i in 0..200_000 {
+                let o = center + random_dir(&mut rng) * (s * 4.0 * rng.next_f32());
+                let aim = center + random_dir(&mut rng) * (s * 1.5 * rng.next_f32());
+                let Some(dir) = (aim - o).try_normalize() else { continue };
+                let t_max = (aim - o).length() * 3.0 * rng.next_f32();
+                if t_max <= 0.0 {
+                    continue;
+                }
+                let ray = Ray { origin: o, dir };
+                let fast = sphere_meets_segment(center, s, &ray, t_max);
+                // f64: the segment's nearest point to the centre.
+                let (c, o64, d) = (center.as_dvec3(), o.as_dvec3(), dir.as_dvec3());
+                let foot = (c - o64).dot(d).clamp(0.0, t_max as f64);
+                let gap = |t: f64| ((o64 + d * t - c).length() - s as f64) / s as f64;
+                let (nearest, start, end) = (gap(foot), gap(0.0), gap(t_max as f64));
+                if nearest.abs() < 1e-5 || start.abs() < 1e-5 || end.abs() < 1e-5 {
+                    near += 1;
+                    continue;
+                }
+                let crosses = nearest < 0.0 && (start > 0.0 || end > 0.0);
+                assert_eq!(fast, crosses, "scale {s}, segment {i}: against f64");
+                assert_eq!(fast, intersect_sphere(center, s, &ray, 0.0, t_max) < t_max, "scale {s}, segment {i}");
+                blocked += fast as u32;
+                both_inside += (start < 0.0 && end < 0.0) as u32;
+            }
+            // Both answers were exercised, and the rounding band was thin.
+            assert!((40_000..160_000).contains(&blocked), "scale {s}: {blocked} blocked");
+            assert!(both_inside > 10_000, "scale {s}: {both_inside} segments wholly inside");
+            assert!(near < 100, "scale {s}: {near} segments within 1e-5 of the surface");
         }
     }
 }

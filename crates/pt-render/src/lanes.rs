@@ -754,6 +754,20 @@ fn intersect_sphere(center: Vec3, radius: f32, o: V3, d: V3, t_max: F) -> F {
     sel(disc.lt(zero_t), t_max, t)
 }
 
+/// `sphere_meets_segment` per lane.
+#[inline(always)]
+fn sphere_meets_segment(center: Vec3, radius: f32, o: V3, d: V3, t_max: F) -> M {
+    let f = o - V3::splat(center);
+    let foot = -f.dot(d);
+    let t = sel(foot.gt(F::splat(0.0)), foot, F::splat(0.0));
+    let t = sel(t.lt(t_max), t, t_max);
+    let nearest = f + d.scale(t);
+    let r2 = F::splat(radius * radius);
+    let c = f.dot(f) - r2;
+    let both_inside = c.lt(F::splat(0.0)) & (c + t_max * (t_max - F::splat(2.0) * foot)).lt(F::splat(0.0));
+    nearest.dot(nearest).lt(r2) & !both_inside
+}
+
 /// `power_heuristic` per lane.
 #[inline(always)]
 fn power_heuristic(f: F, g: F) -> F {
@@ -1331,7 +1345,7 @@ fn connection(frame: &Frame, n: V3, origin: V3, scatter: &Scatter, u: (F, F), v:
     if !m.any() {
         return (V3::splat(Vec3::ZERO), m);
     }
-    let hides = intersect_sphere(light.center, light.radius, origin, dir, dist).lt(dist);
+    let hides = sphere_meets_segment(light.center, light.radius, origin, dir, dist);
     m = m & !hides & !occluded(frame, origin, dir, index, dist, m);
     if !m.any() {
         return (V3::splat(Vec3::ZERO), m);
@@ -1370,7 +1384,7 @@ fn occluded(frame: &Frame, o: V3, d: V3, skip_wall: U, t_max: F, m: M) -> M {
         blocked = blocked | (t.lt(t_max) & !skip_wall.eq(U::splat(i)));
     }
     for s in &frame.geometry.spheres[..frame.spheres as usize] {
-        blocked = blocked | intersect_sphere(s.center, s.radius, o, d, t_max).lt(t_max);
+        blocked = blocked | sphere_meets_segment(s.center, s.radius, o, d, t_max);
     }
     blocked & m
 }
