@@ -328,11 +328,19 @@ pub fn corner_hot_spot(scene: &Scene) -> f32 {
 /// wall.
 pub fn hot_spots(scene: &Scene) -> impl Iterator<Item = f32> + '_ {
     let c = scene.light.center;
-    let area: f32 = scene.walls.iter().map(|w| w.wall.area()).sum();
-    scene
-        .walls
-        .iter()
-        .map(move |w| area / (4.0 * std::f32::consts::PI * (nearest_on_wall(&w.wall, c) - c).length_squared()))
+    let area = walls_area(scene);
+    scene.walls.iter().map(move |w| spot(area, (nearest_on_wall(&w.wall, c) - c).length_squared()))
+}
+
+/// The walls' total area, `A` of [`hot_spots`].
+fn walls_area(scene: &Scene) -> f32 {
+    scene.walls.iter().map(|w| w.wall.area()).sum()
+}
+
+/// A hot spot at squared distance `d2` from the light's centre, for walls
+/// of total area `area`: `A / (4 pi d^2)` ([`hot_spots`]).
+fn spot(area: f32, d2: f32) -> f32 {
+    area / (4.0 * std::f32::consts::PI * d2)
 }
 
 /// The hottest sphere's spot, as [`hot_spots`] measures a wall's (the
@@ -351,15 +359,9 @@ pub fn hot_spots(scene: &Scene) -> impl Iterator<Item = f32> + '_ {
 /// next is 11.
 pub fn sphere_hot_spot(scene: &Scene) -> f32 {
     let c = scene.light.center;
-    let area: f32 = scene.walls.iter().map(|w| w.wall.area()).sum();
-    scene
-        .spheres
-        .iter()
-        .map(|s| {
-            let gap = ((s.sphere.center - c).length() - s.sphere.radius).max(0.0);
-            area / (4.0 * std::f32::consts::PI * gap * gap)
-        })
-        .fold(0.0, f32::max)
+    let area = walls_area(scene);
+    let gaps = scene.spheres.iter().map(|s| ((s.sphere.center - c).length() - s.sphere.radius).max(0.0));
+    gaps.map(|gap| spot(area, gap * gap)).fold(0.0, f32::max)
 }
 
 /// The gap between the light's surface and the nearest point of each
