@@ -55,9 +55,16 @@
 //!   [`CORNER_MIN_HOT_SPOT`]), keeps the glow lobe beside the connections
 //!   ([`CORNER_WALLS`]): at a quarter where the cooler of its two hottest
 //!   walls is very hot ([`CORNER_QUARTER_HOT_SPOT`]), else at a tenth;
-//! - a light right beside a sphere, whose nearest side it makes as hot as
-//!   a corner's walls ([`sphere_hot_spot`]), keeps the glow lobe beside
-//!   the connections at a quarter: the connections reach walls only.
+//! - a light right beside a sphere, whose nearest side it makes hot
+//!   ([`sphere_hot_spot`], [`SPHERE_HOT_SPOT`]), takes the glow lobe at a
+//!   quarter: the connections reach walls only. Where a wall is hot too
+//!   ([`WALL_HOT_SPOT`]) the lobe joins the connections, else it takes
+//!   their place.
+//!
+//! A sphere near the light makes the light look larger from the room
+//! ([`light_extent`] averages over the spheres' surfaces too); a light
+//! that looks large but hangs near a hot wall ([`WALL_HOT_SPOT`]) still
+//! takes connections.
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
 //! wall shadows the light ([`connections_apply`]), and large lights.
@@ -200,6 +207,36 @@ pub const CORNER_WALLS: usize = 2;
 /// 49, geometrically; a tenth was within 1.09x of a quarter on all three.
 pub const CORNER_QUARTER_HOT_SPOT: f32 = 29.0;
 
+/// The smallest sphere spot ([`sphere_hot_spot`]) at which a sphere beside
+/// the light outshines what the connections find, which reach walls only:
+/// with no hot wall ([`WALL_HOT_SPOT`]) the connections give way to the
+/// glow lobe at a quarter, and beside a hot wall the lobe joins them at a
+/// quarter. Measured on rooms made at random (`scripts/random_rooms.py`,
+/// `examples/strategy_probe.rs`; docs/ARCHITECTURE.md, "Per-scene
+/// defaults"), by relMSE at 256 spp times the time per sample on the CPU:
+/// around nine small lights with sphere spots of 13 to 382 and no wall
+/// above 13, connections alone took 1.16x to 27x the time of the glow
+/// lobe at a quarter without them, and the lobe beside them 1.02x to
+/// 1.41x; around four with spots of 6.6 to 9.5, connections alone were
+/// fastest (the lobe alone 1.11x to 1.6x their time). The spheres of
+/// `scenes/` reach 11.4 (the twelve spheres' large light) but for the
+/// light between the spheres (61), which takes no connections.
+pub const SPHERE_HOT_SPOT: f32 = 12.0;
+
+/// The smallest hot spot of the hottest wall ([`hottest_wall_spot`]) at
+/// which the connections pay beside a hot sphere ([`SPHERE_HOT_SPOT`]),
+/// and around a light that looks large from the room ([`GLOW_MAX_EXTENT`],
+/// which a sphere near the light raises) but hangs near a wall. Measured
+/// as [`SPHERE_HOT_SPOT`]: beside spheres of 35 to 79, walls of 25 to 292
+/// took the connections with the lobe at a quarter in 0.91x to 0.99x the
+/// time of the lobe alone, against 1.02x to 1.41x beside walls of 2.1 to
+/// 12.8; around four lights of radius 0.11 to 0.21 that look large beside
+/// a wall of 28 to 33, the connections took 0.28x to 1.08x the time of
+/// the glow-lobe rule (0.28x where the rule had left the lobe off). The
+/// lights of `scenes/` that look large make no wall hotter than 7.9 where
+/// the connections can apply.
+pub const WALL_HOT_SPOT: f32 = 20.0;
+
 /// The smallest share of the light's directions that must meet a wall
 /// first ([`wall_share`]) for connections to take the glow lobe's place. A
 /// connection picks its wall point along a direction from the light's
@@ -332,6 +369,12 @@ pub fn hot_spots(scene: &Scene) -> impl Iterator<Item = f32> + '_ {
     scene.walls.iter().map(move |w| spot(area, (nearest_on_wall(&w.wall, c) - c).length_squared()))
 }
 
+/// The largest of [`hot_spots`] (0 without walls): how hot the light
+/// makes the wall nearest to it.
+pub fn hottest_wall_spot(scene: &Scene) -> f32 {
+    hot_spots(scene).fold(0.0, f32::max)
+}
+
 /// The walls' total area, `A` of [`hot_spots`].
 fn walls_area(scene: &Scene) -> f32 {
     scene.walls.iter().map(|w| w.wall.area()).sum()
@@ -347,16 +390,11 @@ fn spot(area: f32, d2: f32) -> f32 {
 /// walls' area over `4 pi d^2`, `d` the distance from the light's centre
 /// to the sphere's nearest point; infinite where the light's centre is on
 /// or in a sphere, 0 without spheres). The connections pick wall points
-/// only, and a sphere's side right beside a small light is a bright patch
-/// they cannot reach, while the glow lobe's directions around the light
-/// find it: where it is at least [`CORNER_QUARTER_HOT_SPOT`] the lobe
-/// joins the connections at a quarter. Measured on rooms made at random
-/// (docs/ARCHITECTURE.md, "Per-scene defaults"): lights of radius 0.031
-/// and 0.057 beside floating spheres, spots of 334 and 50, reached relMSE
-/// 1e-3 in 0.61x and 0.54x the time with the lobe at a quarter on
-/// lavapipe. Of the scenes in `scenes/`, only the held-out light between
-/// the spheres (61) reaches the bound, and it takes no connections; the
-/// next is 11.
+/// only, and a sphere's side right beside a light is a bright patch they
+/// cannot reach, while the glow lobe's directions around the light find
+/// it: from [`SPHERE_HOT_SPOT`] the lobe takes a quarter of the BSDF
+/// samples, beside the connections where a wall is hot too
+/// ([`WALL_HOT_SPOT`]), else in their place.
 pub fn sphere_hot_spot(scene: &Scene) -> f32 {
     let c = scene.light.center;
     let area = walls_area(scene);
@@ -452,7 +490,10 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
 /// edge ([`hot_walls`]) keeps the glow lobe beside them, at a tenth
 /// unless its walls, or a sphere beside it ([`sphere_hot_spot`]), are
-/// very hot ([`CORNER_QUARTER_HOT_SPOT`]). The glow
+/// very hot ([`CORNER_QUARTER_HOT_SPOT`]). A light beside a hot sphere
+/// ([`SPHERE_HOT_SPOT`]) takes the glow lobe at a quarter, without
+/// connections unless a wall is hot too ([`WALL_HOT_SPOT`]), and a light
+/// that looks large takes connections beside a hot wall. The glow
 /// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
 /// that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
@@ -514,16 +555,22 @@ fn sampling_rule(scene: &Scene) -> u32 {
     // The extent, a cone per grid point (1,792 in the default scene),
     // decides both rules here: worked out once.
     let extent = light_extent(scene);
+    let (wall, sphere) = (hottest_wall_spot(scene), sphere_hot_spot(scene));
     let glow = glow_rule(scene, extent);
-    if extent > GLOW_MAX_EXTENT || !connections_apply(scene) {
+    let looks_small = extent <= GLOW_MAX_EXTENT || wall >= WALL_HOT_SPOT;
+    if !looks_small || !connections_apply(scene) {
         return glow;
     }
     if wall_share(scene) < CONNECT_MIN_WALL_SHARE {
         return if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
     }
+    let sphere_hot = sphere >= SPHERE_HOT_SPOT;
+    if sphere_hot && wall < WALL_HOT_SPOT {
+        return glow;
+    }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
     let corner = corner_hot_spot(scene);
-    if corner >= CORNER_QUARTER_HOT_SPOT || sphere_hot_spot(scene) >= CORNER_QUARTER_HOT_SPOT {
+    if corner >= CORNER_QUARTER_HOT_SPOT || sphere_hot {
         (connected & !FLAG_GLOW_SPARSE) | FLAG_GLOW
     } else if corner < CORNER_MIN_HOT_SPOT {
         connected
@@ -558,9 +605,13 @@ pub fn glow_flags(scene: &Scene) -> u32 {
     glow_rule(scene, light_extent(scene))
 }
 
-/// [`glow_flags`] for a light of extent `extent` ([`light_extent`]).
+/// [`glow_flags`] for a light of extent `extent` ([`light_extent`]); a
+/// sphere very hot beside the light ([`CORNER_QUARTER_HOT_SPOT`] by
+/// [`sphere_hot_spot`]) gives the lobe a quarter whatever the extent: a
+/// light of radius 0.13 whose nearby sphere (a spot of 58) makes it look
+/// large took 2.1x the time of the lobe at a quarter with the lobe off.
 fn glow_rule(scene: &Scene, extent: f32) -> u32 {
-    if glow_pays_at(scene, extent) {
+    if glow_pays_at(scene, extent) || sphere_hot_spot(scene) >= CORNER_QUARTER_HOT_SPOT {
         BASE_FLAGS
     } else if light_clearance(scene) <= GLOW_MAX_CLEARANCE {
         sparse()
@@ -946,7 +997,7 @@ mod tests {
     }
 
     #[test]
-    fn a_sphere_beside_a_small_light_takes_the_glow_lobe_at_a_quarter() {
+    fn a_sphere_beside_the_light_takes_the_glow_lobe_at_a_quarter_unless_a_wall_is_hotter() {
         // The default spheres: the large one (radius 0.4 at (-0.45, 0.4,
         // -0.3)) is 1.2 from the default light's centre, a spot of 1.6:
         // connections alone.
@@ -954,19 +1005,58 @@ mod tests {
         let nearest = (default.spheres[0].sphere.center - default.light.center).length() - 0.4;
         let at = |d: f32| 20.0 / (4.0 * std::f32::consts::PI * d * d);
         assert!((sphere_hot_spot(&default) - at(nearest)).abs() < 1e-4 * at(nearest));
-        assert_eq!(default_flags(&default) & FLAG_GLOW, 0);
-        // A small light 0.2 above the large sphere's top, mid-room: a spot
-        // of 40, no hot wall; the lobe joins the connections at a quarter.
-        let above = with_light(0.05, Vec3::new(-0.45, 1.0, -0.3));
-        assert_eq!(hot_walls(&above), 0);
-        assert!((sphere_hot_spot(&above) - at(0.2)).abs() < 1e-3 * at(0.2));
-        assert_eq!(default_flags(&above), BASE_FLAGS | FLAG_CONNECT | FLAG_SOBOL_DEEP);
-        // 0.3 above it, a spot of 17.7: connections alone.
-        let higher = with_light(0.05, Vec3::new(-0.45, 1.1, -0.3));
-        assert!(sphere_hot_spot(&higher) < CORNER_QUARTER_HOT_SPOT);
-        assert_eq!(default_flags(&higher) & FLAG_GLOW, 0);
+        assert!((hottest_wall_spot(&default) - at(0.3)).abs() < 1e-4 * at(0.3));
+        assert_eq!(default_flags(&default), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
+        // A small light 0.3 above the large sphere's top, mid-room: a spot
+        // of 17.7, no wall above 5.3 (the left one, 0.55 away): the glow
+        // lobe at a quarter, no connections.
+        let above = with_light(0.05, Vec3::new(-0.45, 1.1, -0.3));
+        assert!((sphere_hot_spot(&above) - at(0.3)).abs() < 1e-3 * at(0.3));
+        assert!(sphere_hot_spot(&above) >= SPHERE_HOT_SPOT);
+        assert!(hottest_wall_spot(&above) < 5.3);
+        assert_eq!(default_flags(&above), BASE_FLAGS);
+        // 0.4 above it, a spot of 9.9: connections alone.
+        let higher = with_light(0.05, Vec3::new(-0.45, 1.2, -0.3));
+        assert!(sphere_hot_spot(&higher) < SPHERE_HOT_SPOT);
+        assert_eq!(default_flags(&higher), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
+        // 0.3 above a sphere pushed against the back wall, 0.25 from it: a
+        // hot wall (25) too; the lobe joins the connections at a quarter.
+        let mut walled = above.clone();
+        walled.spheres[0].sphere.center.z = -0.55;
+        walled.light.center.z = -0.75;
+        assert!(hottest_wall_spot(&walled) >= WALL_HOT_SPOT);
+        assert!(sphere_hot_spot(&walled) >= SPHERE_HOT_SPOT);
+        assert_eq!(default_flags(&walled), BASE_FLAGS | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // Without spheres there is no spot.
         assert_eq!(sphere_hot_spot(&Scene { spheres: Vec::new(), ..default.clone() }), 0.0);
+        // Where the light looks large and no wall is hot, the glow-lobe
+        // rule gives the lobe a quarter beside a very hot sphere: a light
+        // of radius 0.2, its centre 0.22 above the large sphere (a spot of
+        // 33), mid-room.
+        let large = with_light(0.2, Vec3::new(-0.45, 1.02, -0.3));
+        assert!(light_extent(&large) > GLOW_MAX_EXTENT);
+        assert!(sphere_hot_spot(&large) >= CORNER_QUARTER_HOT_SPOT);
+        assert!(hottest_wall_spot(&large) < WALL_HOT_SPOT);
+        assert_eq!(default_flags(&large), BASE_FLAGS);
+    }
+
+    #[test]
+    fn a_light_that_looks_large_takes_connections_beside_a_hot_wall() {
+        // A light of radius 0.2 whose centre is 0.22 below the ceiling (a
+        // spot of 33), over the large sphere's top 0.3 below it: large
+        // from the room, yet the connections find the ceiling's glow.
+        let near = with_light(0.2, Vec3::new(-0.45, 1.78, -0.3));
+        assert!(light_extent(&near) > GLOW_MAX_EXTENT, "{}", light_extent(&near));
+        assert!(hottest_wall_spot(&near) >= WALL_HOT_SPOT);
+        assert!(corner_hot_spot(&near) < CORNER_MIN_HOT_SPOT);
+        assert!(sphere_hot_spot(&near) < SPHERE_HOT_SPOT);
+        assert_eq!(default_flags(&near), with_connections(glow_flags(&near)) | FLAG_SOBOL_DEEP);
+        // A light of radius 0.25, 0.55 below the ceiling (a spot of 5.3):
+        // the glow-lobe rule.
+        let lower = with_light(0.25, Vec3::new(-0.45, 1.45, -0.3));
+        assert!(light_extent(&lower) > GLOW_MAX_EXTENT);
+        assert!(hottest_wall_spot(&lower) < WALL_HOT_SPOT);
+        assert_eq!(default_flags(&lower) & FLAG_CONNECT, 0);
     }
 
     #[test]
