@@ -214,11 +214,16 @@ pub const CORNER_QUARTER_HOT_SPOT: f32 = 29.0;
 /// quarter. Measured on rooms made at random (`scripts/random_rooms.py`,
 /// `examples/strategy_probe.rs`; docs/ARCHITECTURE.md, "Per-scene
 /// defaults"), by relMSE at 256 spp times the time per sample on the CPU:
-/// around nine small lights with sphere spots of 13 to 382 and no wall
+/// around ten small lights with sphere spots of 13 to 382 and no wall
 /// above 13, connections alone took 1.16x to 27x the time of the glow
 /// lobe at a quarter without them, and the lobe beside them 1.02x to
 /// 1.41x; around four with spots of 6.6 to 9.5, connections alone were
-/// fastest (the lobe alone 1.11x to 1.6x their time). The spheres of
+/// fastest (the lobe alone 1.11x to 1.6x their time). Farther than
+/// [`SMALL_OPEN_CLEARANCE`] from every surface the lobe is off as well,
+/// as for a small light of a low wall share: around three lights of
+/// radius 0.03 to 0.05, 5.6 to 8.2 radii from the nearest sphere (spots of
+/// 15 to 20), the lobe at a quarter took 1.16x to 1.46x the time of no
+/// lobe, and connections 1.44x to 1.68x. The spheres of
 /// `scenes/` reach 11.4 (the twelve spheres' large light) but for the
 /// light between the spheres (61), which takes no connections.
 pub const SPHERE_HOT_SPOT: f32 = 12.0;
@@ -273,8 +278,9 @@ pub const CONNECT_MIN_WALL_SHARE: f32 = 0.69;
 /// the connected lights their base flags: there it would change the tiny
 /// light's (14 radii from the ceiling), which was not measured without the
 /// lobe's share bit. The light near the open front has since taken
-/// connections ([`CONNECT_MIN_WALL_SHARE`]): the bound now decides only for
-/// small lights of a lower wall share.
+/// connections ([`CONNECT_MIN_WALL_SHARE`]): the bound now decides for
+/// small lights of a lower wall share, and for those beside a hot sphere
+/// that take no connections ([`SPHERE_HOT_SPOT`]).
 pub const SMALL_OPEN_CLEARANCE: f32 = 3.5;
 
 /// The gap between the light and the nearest wall or sphere, in light
@@ -561,12 +567,12 @@ fn sampling_rule(scene: &Scene) -> u32 {
     if !looks_small || !connections_apply(scene) {
         return glow;
     }
-    if wall_share(scene) < CONNECT_MIN_WALL_SHARE {
-        return if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
-    }
+    // A small light without connections keeps the glow lobe only near a
+    // wall or a sphere.
+    let unconnected = || if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
     let sphere_hot = sphere >= SPHERE_HOT_SPOT;
-    if sphere_hot && wall < WALL_HOT_SPOT {
-        return glow;
+    if wall_share(scene) < CONNECT_MIN_WALL_SHARE || (sphere_hot && wall < WALL_HOT_SPOT) {
+        return unconnected();
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
     let corner = corner_hot_spot(scene);
@@ -1007,16 +1013,20 @@ mod tests {
         assert!((sphere_hot_spot(&default) - at(nearest)).abs() < 1e-4 * at(nearest));
         assert!((hottest_wall_spot(&default) - at(0.3)).abs() < 1e-4 * at(0.3));
         assert_eq!(default_flags(&default), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
-        // A small light 0.3 above the large sphere's top, mid-room: a spot
-        // of 17.7, no wall above 5.3 (the left one, 0.55 away): the glow
-        // lobe at a quarter, no connections.
-        let above = with_light(0.05, Vec3::new(-0.45, 1.1, -0.3));
+        // A light of radius 0.1 whose centre is 0.3 above the large
+        // sphere's top, mid-room: a spot of 17.7, no wall above 5.3 (the
+        // left one, 0.55 away): the glow lobe at a quarter, no connections.
+        let above = with_light(0.1, Vec3::new(-0.45, 1.1, -0.3));
         assert!((sphere_hot_spot(&above) - at(0.3)).abs() < 1e-3 * at(0.3));
         assert!(sphere_hot_spot(&above) >= SPHERE_HOT_SPOT);
         assert!(hottest_wall_spot(&above) < 5.3);
         assert_eq!(default_flags(&above), BASE_FLAGS);
+        // Of radius 0.05 there, 5 radii from the sphere: no lobe either.
+        let small = with_light(0.05, Vec3::new(-0.45, 1.1, -0.3));
+        assert!(surface_clearance(&small) > SMALL_OPEN_CLEARANCE);
+        assert_eq!(default_flags(&small), in_the_open());
         // 0.4 above it, a spot of 9.9: connections alone.
-        let higher = with_light(0.05, Vec3::new(-0.45, 1.2, -0.3));
+        let higher = with_light(0.1, Vec3::new(-0.45, 1.2, -0.3));
         assert!(sphere_hot_spot(&higher) < SPHERE_HOT_SPOT);
         assert_eq!(default_flags(&higher), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
         // 0.3 above a sphere pushed against the back wall, 0.25 from it: a
