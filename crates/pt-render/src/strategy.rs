@@ -63,8 +63,8 @@
 //!
 //! A sphere near the light makes the light look larger from the room
 //! ([`light_extent`] averages over the spheres' surfaces too); a light
-//! that looks large but hangs near a hot wall ([`WALL_HOT_SPOT`]) still
-//! takes connections.
+//! that looks large but hangs near a hot wall ([`WALL_HOT_SPOT`]) takes
+//! the glow lobe at a quarter.
 //!
 //! The glow-lobe rule above is the rule for the rest: rooms where some
 //! wall shadows the light ([`connections_apply`]), and large lights.
@@ -215,10 +215,10 @@ pub const CORNER_QUARTER_HOT_SPOT: f32 = 29.0;
 /// `examples/strategy_probe.rs`; docs/ARCHITECTURE.md, "Per-scene
 /// defaults"), by relMSE at 256 spp times the time per sample on the CPU:
 /// around ten small lights with sphere spots of 13 to 382 and no wall
-/// above 13, connections alone took 1.16x to 27x the time of the glow
-/// lobe at a quarter without them, and the lobe beside them 1.02x to
-/// 1.41x; around four with spots of 6.6 to 9.5, connections alone were
-/// fastest (the lobe alone 1.11x to 1.6x their time). Farther than
+/// above 13, connections alone took 1.16x to 29x the time of the glow
+/// lobe at a quarter without them, and the lobe beside them 1.10x to
+/// 1.48x; around six with spots of 6.6 to 9.5, connections alone took
+/// 0.61x to 0.99x the time of the lobe at a quarter. Farther than
 /// [`SMALL_OPEN_CLEARANCE`] from every surface the lobe is off as well,
 /// as for a small light of a low wall share: around three lights of
 /// radius 0.03 to 0.05, 5.6 to 8.2 radii from the nearest sphere (spots of
@@ -230,16 +230,18 @@ pub const SPHERE_HOT_SPOT: f32 = 12.0;
 
 /// The smallest hot spot of the hottest wall ([`hottest_wall_spot`]) at
 /// which the connections pay beside a hot sphere ([`SPHERE_HOT_SPOT`]),
-/// and around a light that looks large from the room ([`GLOW_MAX_EXTENT`],
-/// which a sphere near the light raises) but hangs near a wall. Measured
-/// as [`SPHERE_HOT_SPOT`]: beside spheres of 35 to 79, walls of 25 to 292
-/// took the connections with the lobe at a quarter in 0.91x to 0.99x the
-/// time of the lobe alone, against 1.02x to 1.41x beside walls of 2.1 to
-/// 12.8; around four lights of radius 0.11 to 0.21 that look large beside
-/// a wall of 28 to 33, the connections took 0.28x to 1.08x the time of
-/// the glow-lobe rule (0.28x where the rule had left the lobe off). The
-/// lights of `scenes/` that look large make no wall hotter than 7.9 where
-/// the connections can apply.
+/// and the glow lobe takes a quarter around a light that looks large from
+/// the room ([`GLOW_MAX_EXTENT`], which a sphere near the light raises).
+/// Measured as [`SPHERE_HOT_SPOT`]: beside spheres of 35 to 79, walls of
+/// 25 to 292 took the connections with the lobe at a quarter in 0.89x to
+/// 0.99x the time of the lobe alone, against 1.10x to 1.48x beside walls
+/// of 2.1 to 12.8. Around four lights of radius 0.11 to 0.21 that look
+/// large beside a wall of 28 to 33, the glow-lobe rule (a tenth, or none
+/// in the open) took 1.0x to 4.4x the time of the fastest strategy and the
+/// lobe at a quarter 1.0x to 1.08x; connections with it were faster on
+/// two (0.93x, 0.94x) and slower on two (1.19x, 1.36x). The lights of
+/// `scenes/` that look
+/// large make no wall hotter than 7.9 where no wall can shadow them.
 pub const WALL_HOT_SPOT: f32 = 20.0;
 
 /// The smallest share of the light's directions that must meet a wall
@@ -499,7 +501,7 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// very hot ([`CORNER_QUARTER_HOT_SPOT`]). A light beside a hot sphere
 /// ([`SPHERE_HOT_SPOT`]) takes the glow lobe at a quarter, without
 /// connections unless a wall is hot too ([`WALL_HOT_SPOT`]), and a light
-/// that looks large takes connections beside a hot wall. The glow
+/// that looks large takes the lobe at a quarter beside a hot wall. The glow
 /// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
 /// that switching the lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
@@ -563,9 +565,12 @@ fn sampling_rule(scene: &Scene) -> u32 {
     let extent = light_extent(scene);
     let (wall, sphere) = (hottest_wall_spot(scene), sphere_hot_spot(scene));
     let glow = glow_rule(scene, extent);
-    let looks_small = extent <= GLOW_MAX_EXTENT || wall >= WALL_HOT_SPOT;
-    if !looks_small || !connections_apply(scene) {
+    if !connections_apply(scene) {
         return glow;
+    }
+    if extent > GLOW_MAX_EXTENT {
+        // A light that looks large beside a hot wall: the lobe at a quarter.
+        return if wall >= WALL_HOT_SPOT { (glow & !FLAG_GLOW_SPARSE) | FLAG_GLOW } else { glow };
     }
     // A small light without connections keeps the glow lobe only near a
     // wall or a sphere.
@@ -1051,22 +1056,22 @@ mod tests {
     }
 
     #[test]
-    fn a_light_that_looks_large_takes_connections_beside_a_hot_wall() {
+    fn a_light_that_looks_large_takes_the_glow_lobe_at_a_quarter_beside_a_hot_wall() {
         // A light of radius 0.2 whose centre is 0.22 below the ceiling (a
-        // spot of 33), over the large sphere's top 0.3 below it: large
-        // from the room, yet the connections find the ceiling's glow.
+        // spot of 33), over the large sphere's top: large from the room,
+        // with the ceiling's glow beside it.
         let near = with_light(0.2, Vec3::new(-0.45, 1.78, -0.3));
         assert!(light_extent(&near) > GLOW_MAX_EXTENT, "{}", light_extent(&near));
         assert!(hottest_wall_spot(&near) >= WALL_HOT_SPOT);
-        assert!(corner_hot_spot(&near) < CORNER_MIN_HOT_SPOT);
-        assert!(sphere_hot_spot(&near) < SPHERE_HOT_SPOT);
-        assert_eq!(default_flags(&near), with_connections(glow_flags(&near)) | FLAG_SOBOL_DEEP);
+        assert!(sphere_hot_spot(&near) < CORNER_QUARTER_HOT_SPOT);
+        assert_eq!(glow_flags(&near), sparse());
+        assert_eq!(default_flags(&near), BASE_FLAGS);
         // A light of radius 0.25, 0.55 below the ceiling (a spot of 5.3):
         // the glow-lobe rule.
         let lower = with_light(0.25, Vec3::new(-0.45, 1.45, -0.3));
         assert!(light_extent(&lower) > GLOW_MAX_EXTENT);
         assert!(hottest_wall_spot(&lower) < WALL_HOT_SPOT);
-        assert_eq!(default_flags(&lower) & FLAG_CONNECT, 0);
+        assert_eq!(default_flags(&lower), glow_flags(&lower));
     }
 
     #[test]
