@@ -240,8 +240,8 @@ pub const SPHERE_HOT_SPOT: f32 = 12.0;
 /// in the open) took 1.0x to 4.4x the time of the fastest strategy and the
 /// lobe at a quarter 1.0x to 1.08x; connections with it were faster on
 /// two (0.93x, 0.94x) and slower on two (1.19x, 1.36x). The lights of
-/// `scenes/` that look
-/// large make no wall hotter than 7.9 where no wall can shadow them.
+/// `scenes/` that look large make no wall hotter than 7.9 where no wall
+/// can shadow them.
 pub const WALL_HOT_SPOT: f32 = 20.0;
 
 /// The smallest share of the light's directions that must meet a wall
@@ -497,13 +497,13 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// With connections every draw comes from the Sobol
 /// sequence (`FLAG_SOBOL_DEEP`), and a light in a corner or against an
 /// edge ([`hot_walls`]) keeps the glow lobe beside them, at a tenth
-/// unless its walls, or a sphere beside it ([`sphere_hot_spot`]), are
-/// very hot ([`CORNER_QUARTER_HOT_SPOT`]). A light beside a hot sphere
-/// ([`SPHERE_HOT_SPOT`]) takes the glow lobe at a quarter, without
-/// connections unless a wall is hot too ([`WALL_HOT_SPOT`]), and a light
-/// that looks large takes the lobe at a quarter beside a hot wall. The glow
-/// lobe's share bit (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so
-/// that switching the lobe back on gives the share the light calls for.
+/// unless its walls are very hot ([`CORNER_QUARTER_HOT_SPOT`]). A light
+/// beside a hot sphere ([`SPHERE_HOT_SPOT`]) takes the glow lobe at a
+/// quarter, without connections unless a wall is hot too
+/// ([`WALL_HOT_SPOT`]), and a light that looks large takes the lobe at a
+/// quarter beside a hot wall. The glow lobe's share bit
+/// (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so that switching the
+/// lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
     let flags = sampling_rule(scene);
     if silhouette_in_view(scene) { flags } else { flags & !FLAG_LIGHT_EDGE }
