@@ -235,14 +235,15 @@ pub const SPHERE_HOT_SPOT: f32 = 12.0;
 /// Measured as [`SPHERE_HOT_SPOT`]: beside spheres of 35 to 79, walls of
 /// 25 to 292 took the connections with the lobe at a quarter in 0.89x to
 /// 0.99x the time of the lobe alone, against 1.10x to 1.48x beside walls
-/// of 2.1 to 12.8. Around four lights of radius 0.11 to 0.21 that look
-/// large beside a wall of 28 to 33, the glow-lobe rule (a tenth, or none
+/// of 2.1 to 12.8. Around six lights of radius 0.11 to 0.28 that look
+/// large beside a wall of 16.6 to 33, the glow-lobe rule (a tenth, or none
 /// in the open) took 1.0x to 4.4x the time of the fastest strategy and the
-/// lobe at a quarter 1.0x to 1.08x; connections with it were faster on
-/// two (0.93x, 0.94x) and slower on two (1.19x, 1.36x). The lights of
-/// `scenes/` that look large make no wall hotter than 7.9 where no wall
-/// can shadow them.
-pub const WALL_HOT_SPOT: f32 = 20.0;
+/// lobe at a quarter 1.0x to 1.15x; connections with it took 0.93x to
+/// 1.36x the lobe's time (faster on three, slower on three). Beside walls
+/// of 6.3 to 11.9 the glow-lobe rule stayed within 1.01x of the fastest.
+/// The lights of `scenes/` that look large make no wall hotter than 7.9
+/// where no wall can shadow them.
+pub const WALL_HOT_SPOT: f32 = 15.0;
 
 /// The smallest share of the light's directions that must meet a wall
 /// first ([`wall_share`]) for connections to take the glow lobe's place. A
