@@ -7,8 +7,8 @@ spheres of radius 0.1 to 0.45 (half of them on the floor) and a light of
 radius 0.03 to 0.25 (log-uniform) whose surface lies near the first
 sphere: its centre 0.03 to 0.6 (log-uniform) plus its radius from the
 sphere's surface. With --anywhere-every-other, every other room has a
-light of radius 0.03 to 0.5 anywhere in the room instead. Every light has
-the default light's power.
+light of radius 0.03 to 0.5 anywhere in the room instead, and with
+--anywhere every room has. Every light has the default light's power.
 
     scripts/random_rooms.py OUT_DIR --seed 20261208 --count 20 --prefix sh
     scripts/random_rooms.py OUT_DIR --seed 20261209 --count 24 --prefix rr --anywhere-every-other
@@ -39,6 +39,7 @@ def main():
     ap.add_argument("--count", type=int, default=20)
     ap.add_argument("--prefix", default="room")
     ap.add_argument("--anywhere-every-other", action="store_true")
+    ap.add_argument("--anywhere", action="store_true")
     a = ap.parse_args()
     random.seed(a.seed)
     default = open(os.path.join(ROOT, "scenes", "default.toml")).read()
@@ -60,7 +61,7 @@ def main():
         gap = math.exp(random.uniform(math.log(0.03), math.log(0.6)))
         sc, sr = spheres[0]
         placed = False
-        anywhere = a.anywhere_every_other and k % 2 == 1
+        anywhere = a.anywhere or (a.anywhere_every_other and k % 2 == 1)
         if anywhere:
             lr = math.exp(random.uniform(math.log(0.03), math.log(0.5)))
         for _ in range(200):
