@@ -603,29 +603,35 @@ fn sampling_rule(scene: &Scene) -> u32 {
     }
     if extent > GLOW_MAX_EXTENT {
         // A light that looks large beside a hot wall: the lobe at a quarter.
-        return if wall >= WALL_HOT_SPOT { (glow & !FLAG_GLOW_SPARSE) | FLAG_GLOW } else { glow };
+        return if wall >= WALL_HOT_SPOT { at_a_quarter(glow) } else { glow };
     }
-    // A small light without connections keeps the glow lobe only near a
-    // wall or a sphere.
-    let unconnected = || if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
-    // Too few of the light's directions meet a wall where the spheres
-    // catch the rest; those that leave by the open side cost less. Beside
-    // a hot sphere the walls decide: connections where one is hot too.
-    let few_walls = wall_share(scene) < CONNECT_MIN_WALL_SHARE && sphere_share(scene) >= CONNECT_MAX_SPHERE_SHARE;
     let sphere_hot = sphere >= SPHERE_HOT_SPOT;
-    let unconnected_here = if sphere_hot { wall < WALL_HOT_SPOT } else { few_walls };
-    if unconnected_here {
-        return unconnected();
+    // Beside a hot sphere the walls decide: connections where one is hot
+    // too. Elsewhere a low wall share keeps them off where the spheres
+    // catch the light the walls miss, not where it leaves by the open side.
+    let without_connections = if sphere_hot {
+        wall < WALL_HOT_SPOT
+    } else {
+        wall_share(scene) < CONNECT_MIN_WALL_SHARE && sphere_share(scene) >= CONNECT_MAX_SPHERE_SHARE
+    };
+    if without_connections {
+        // A small light keeps the glow lobe only near a wall or a sphere.
+        return if surface_clearance(scene) > SMALL_OPEN_CLEARANCE { in_the_open() } else { glow };
     }
     let connected = with_connections(glow) | FLAG_SOBOL_DEEP;
     let corner = corner_hot_spot(scene);
     if corner >= CORNER_QUARTER_HOT_SPOT || sphere_hot {
-        (connected & !FLAG_GLOW_SPARSE) | FLAG_GLOW
+        at_a_quarter(connected)
     } else if corner < CORNER_MIN_HOT_SPOT {
         connected
     } else {
         connected | FLAG_GLOW | FLAG_GLOW_SPARSE
     }
+}
+
+/// `flags` with the glow lobe on at a quarter of the BSDF samples.
+fn at_a_quarter(flags: u32) -> u32 {
+    (flags & !FLAG_GLOW_SPARSE) | FLAG_GLOW
 }
 
 /// `flags` with connections in the glow lobe's place.
