@@ -602,8 +602,12 @@ fn sampling_rule(scene: &Scene) -> u32 {
         return glow;
     }
     if extent > GLOW_MAX_EXTENT {
-        // A light that looks large beside a hot wall: the lobe at a quarter.
-        return if wall >= WALL_HOT_SPOT { at_a_quarter(glow) } else { glow };
+        // A light that looks large beside a hot wall or a very hot sphere:
+        // the lobe at a quarter. A light of radius 0.13 whose nearby
+        // sphere (a spot of 58) made it look large took 2.1x the time of
+        // the lobe at a quarter with the lobe off.
+        let hot = wall >= WALL_HOT_SPOT || sphere >= CORNER_QUARTER_HOT_SPOT;
+        return if hot { at_a_quarter(glow) } else { glow };
     }
     let sphere_hot = sphere >= SPHERE_HOT_SPOT;
     // Beside a hot sphere the walls decide: connections where one is hot
@@ -660,13 +664,9 @@ pub fn glow_flags(scene: &Scene) -> u32 {
     glow_rule(scene, light_extent(scene))
 }
 
-/// [`glow_flags`] for a light of extent `extent` ([`light_extent`]); a
-/// sphere very hot beside the light ([`CORNER_QUARTER_HOT_SPOT`] by
-/// [`sphere_hot_spot`]) gives the lobe a quarter whatever the extent: a
-/// light of radius 0.13 whose nearby sphere (a spot of 58) makes it look
-/// large took 2.1x the time of the lobe at a quarter with the lobe off.
+/// [`glow_flags`] for a light of extent `extent` ([`light_extent`]).
 fn glow_rule(scene: &Scene, extent: f32) -> u32 {
-    if glow_pays_at(scene, extent) || sphere_hot_spot(scene) >= CORNER_QUARTER_HOT_SPOT {
+    if glow_pays_at(scene, extent) {
         BASE_FLAGS
     } else if light_clearance(scene) <= GLOW_MAX_CLEARANCE {
         sparse()
@@ -1116,8 +1116,8 @@ mod tests {
         assert_eq!(default_flags(&walled), BASE_FLAGS | FLAG_CONNECT | FLAG_SOBOL_DEEP);
         // Without spheres there is no spot.
         assert_eq!(sphere_hot_spot(&Scene { spheres: Vec::new(), ..default.clone() }), 0.0);
-        // Where the light looks large and no wall is hot, the glow-lobe
-        // rule gives the lobe a quarter beside a very hot sphere: a light
+        // Where the light looks large and no wall is hot, a very hot
+        // sphere gives the lobe a quarter: a light
         // of radius 0.2, its centre 0.22 above the large sphere (a spot of
         // 33), mid-room.
         let large = with_light(0.2, Vec3::new(-0.45, 1.02, -0.3));
