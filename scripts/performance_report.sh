@@ -10,6 +10,11 @@
 #   scripts/performance_report.sh spheres  the scenes with more spheres only
 #   scripts/performance_report.sh contact  the scenes where walls cut the
 #                                          light or spheres only
+#   scripts/performance_report.sh DIR [OUT_DIR]
+#                                          any other folder of scenes (new
+#                                          rooms, say), into OUT_DIR
+#                                          (target/bench/NAME by default)
+#                                          with its report OUT_DIR/report.md
 #   scripts/performance_report.sh rebuild  the five suites' sections again
 #                                          from their runs' points, measuring
 #                                          nothing (after a change to the
@@ -40,7 +45,11 @@ agreement() {
 # more spheres (scenes/spheres/) or those where walls cut the light or
 # spheres (scenes/contact/) in their own report, docs/bench/NAME.md.
 suite_of() {
-    if [ -z "$1" ]; then
+    if [ -d "$1" ]; then
+        dir=${2:-target/bench/$(basename "$1")}
+        mitsuba=$dir/mitsuba report=$dir/report.md
+        args=(--suite --suite-dir "$1" --width 128 --height 128 --reference-spp 8192 --out-dir "$dir")
+    elif [ -z "$1" ]; then
         dir=$out mitsuba=$out/mitsuba-suite report=docs/PERFORMANCE.md
         args=(--suite --width 128 --height 128 --reference-spp 8192 --out-dir "$dir")
     else
@@ -52,7 +61,7 @@ suite_of() {
 # References rendered once and cached by scene hash under the suite's
 # folder, Mitsuba's four samplers, then ours.
 measure_suite() {
-    suite_of "$1"
+    suite_of "$@"
     "$bin" bench convergence "${args[@]}" --reference-only
     python3 scripts/mitsuba/compare.py --suite "$dir/suite.tsv" "$mitsuba" --seeds "$seeds"
     "$bin" bench convergence "${args[@]}" --max-spp 16384 --seeds "$seeds" --mitsuba-dir "$mitsuba" --report "$report"
@@ -69,6 +78,16 @@ case "${1:-all}" in
         ;;
     holdout | probe | spheres | contact)
         measure_suite "$1"
+        exit 0
+        ;;
+    "" | all | suite) ;;
+    *)
+        if [ ! -d "$1" ]; then
+            echo "performance_report.sh: $1: not a suite's name nor a folder of scenes" >&2
+            exit 2
+        fi
+        mkdir -p "${2:-target/bench/$(basename "$1")}"
+        measure_suite "$1" "${2:-}"
         exit 0
         ;;
 esac

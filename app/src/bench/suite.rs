@@ -32,8 +32,27 @@ pub struct SuiteScene {
 /// Marks the line of a suite scene that says what it stresses.
 const STRESSES: &str = "# stresses:";
 
+/// What a scene without a `# stresses:` line is said to stress in the
+/// tables: its light and spheres, so that a folder of new scenes runs as
+/// it is.
+fn what_it_holds(scene: &Scene) -> String {
+    let (c, r) = (scene.light.center, scene.light.radius);
+    let spheres = match scene.spheres.len() {
+        1 => "1 sphere".to_string(),
+        n => format!("{n} spheres"),
+    };
+    format!(
+        "(no `{STRESSES}` line) a light of radius {r} at ({}, {}, {}), {spheres}, {} walls.",
+        c.x,
+        c.y,
+        c.z,
+        scene.walls.len()
+    )
+}
+
 /// The scenes of `dir` (every `*.toml`, by name), each with its
-/// `# stresses:` line.
+/// `# stresses:` line, or where it has none, a line naming its light and
+/// spheres ([`what_it_holds`]).
 pub fn load_suite(dir: &Path) -> Result<Vec<SuiteScene>> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot read the suite folder", dir.display()))?
@@ -48,12 +67,11 @@ pub fn load_suite(dir: &Path) -> Result<Vec<SuiteScene>> {
         .into_iter()
         .map(|path| {
             let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
-            let stresses = text
-                .lines()
-                .find_map(|l| l.strip_prefix(STRESSES))
-                .map(|s| s.trim().to_string())
-                .with_context(|| format!("{}:1: a suite scene needs a `{STRESSES} ...` line", path.display()))?;
             let scene = Scene::from_toml(&text, &path)?;
+            let stresses = match text.lines().find_map(|l| l.strip_prefix(STRESSES)) {
+                Some(line) => line.trim().to_string(),
+                None => what_it_holds(&scene),
+            };
             let name = path.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned());
             Ok(SuiteScene { name, path, stresses, scene })
         })
@@ -962,13 +980,37 @@ mod tests {
         assert!(worst.0 < 5.0, "{}: largest |t| {:.2}", worst.1, worst.0);
     }
 
+    /// A folder of new scenes runs as it is: a scene without the line is
+    /// named by its light and spheres, and one with it keeps its words.
+    #[test]
+    fn a_scene_without_a_stresses_line_is_named_by_its_light() {
+        let dir = std::env::temp_dir().join(format!("pt-suite-stresses-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plain = Scene::default_scene().to_toml();
+        std::fs::write(dir.join("a.toml"), &plain).unwrap();
+        std::fs::write(dir.join("b.toml"), format!("# stresses: the default room again.\n{plain}")).unwrap();
+        let suite = load_suite(&dir);
+        std::fs::remove_dir_all(&dir).unwrap();
+        let suite = suite.unwrap();
+        assert_eq!(suite.len(), 2);
+        assert_eq!(
+            suite[0].stresses,
+            "(no `# stresses:` line) a light of radius 0.15 at (0, 1.7, 0), 2 spheres, 5 walls."
+        );
+        assert_eq!(suite[1].stresses, "the default room again.");
+        assert!(suite[0].scene == suite[1].scene);
+    }
+
     #[test]
     fn every_scene_of_the_suite_says_what_it_stresses_and_loads() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
         let suite = load_suite(&dir).unwrap();
         assert!(suite.len() >= 8, "{} scenes", suite.len());
         assert!(suite.iter().any(|s| s.name == "default" && s.scene == Scene::default_scene()));
-        assert!(suite.iter().all(|s| s.stresses.len() > 20), "every scene says what it stresses");
+        assert!(
+            suite.iter().all(|s| s.stresses.len() > 20 && !s.stresses.starts_with("(no ")),
+            "every scene says what it stresses"
+        );
         let radii: Vec<f32> = suite.iter().map(|s| s.scene.light.radius).collect();
         let (lo, hi) = radii.iter().fold((f32::MAX, 0.0f32), |(a, b), &r| (a.min(r), b.max(r)));
         assert!(lo <= 0.025 && hi >= 0.45, "light radii {lo} to {hi}");

@@ -15,14 +15,20 @@
 //! --height 128 --spp 8192 --out REFERENCE.exr`). The strategies: the glow
 //! lobe off, at a tenth or at a quarter (`g0`, `g10`, `g25`), each with
 //! connections (`c0`, `c10`, `c25`), on top of the project's base flags
-//! with the scene's own light-edge bit; `def` for the scene's default, or
-//! flags in hex. A `*` marks the strategy that is the scene's default.
+//! with the scene's own light-edge bit; `def` for the scene's default;
+//! the bench's one-flag changes to the default (`mis` for NEE with MIS,
+//! `cv`, `edge`, `sobol` and `proj` for NEE's control variate, the light
+//! edge's, Sobol for every draw and NEE by projected solid angle, each
+//! switched); or flags in hex. A `*` marks the strategy that is the scene's default.
 
 use std::error::Error;
 use std::path::Path;
 use std::time::Instant;
 
-use pt_core::params::{FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_SOBOL_DEEP};
+use pt_core::params::{
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_MIS, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
+    FLAG_SOBOL_DEEP,
+};
 use pt_render::gpu::GpuContext;
 use pt_render::strategy as st;
 use pt_render::{Device, RenderSettings, Renderer, Scene, metrics, output};
@@ -50,6 +56,11 @@ fn main() -> Result<(), Box<dyn Error>> {
             "c0" => (base & !FLAG_GLOW) | connected,
             "c10" => base | FLAG_GLOW_SPARSE | connected,
             "c25" => base | connected,
+            "mis" => default | FLAG_MIS,
+            "cv" => default ^ FLAG_NEE_CONTROL,
+            "edge" => default ^ FLAG_LIGHT_EDGE,
+            "sobol" => default ^ FLAG_SOBOL_DEEP,
+            "proj" => default ^ FLAG_NEE_PROJECTED,
             hex => u32::from_str_radix(hex.trim_start_matches("0x"), 16)?,
         })
     };
