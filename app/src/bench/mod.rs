@@ -156,14 +156,27 @@ impl Strategy {
     }
 
     /// Whether this strategy, not the default itself, renders `scene` just
-    /// as the default does (NEE with MIS where the scene's default has
-    /// MIS): timing it again would measure only the machine's noise.
+    /// as the default does, the same samples bit for bit (NEE with MIS
+    /// where the scene's default has MIS, or has NEE's control variate:
+    /// [`image_flags`]): timing it again would measure only the machine's
+    /// noise, and the fastest of a dozen noisy timings would then be a
+    /// twin of the default.
     pub fn same_as_default_on(&self, scene: &pt_render::Scene) -> bool {
         let d = StrategyId::Default.strategy();
         self.id != StrategyId::Default
-            && self.flags_for(scene) == d.flags_for(scene)
+            && image_flags(self.flags_for(scene)) == image_flags(d.flags_for(scene))
             && (self.rr_start, self.spp_per_frame) == (d.rr_start, d.spp_per_frame)
     }
+}
+
+/// Integrator `flags` without the bits that change no sample: MIS where
+/// NEE takes the control variate ([`pt_core::integrator::nee_control`]).
+/// There NEE takes all of the light at every vertex whose light cone is
+/// not empty, so a BSDF ray that reaches the light weighs 0 with MIS or
+/// without, and a vertex whose cone is empty has no NEE sample to weigh
+/// (its BSDF ray takes the whole light either way).
+pub fn image_flags(flags: u32) -> u32 {
+    if pt_core::integrator::nee_control(flags) { flags & !FLAG_MIS } else { flags }
 }
 
 /// Samples per pixel per frame of `render` and of the default strategy.
@@ -344,9 +357,16 @@ mod tests {
         let same = |scene: &pt_render::Scene| {
             STRATEGIES.iter().filter(|s| s.same_as_default_on(scene)).map(|s| s.id).collect::<Vec<_>>()
         };
-        assert_eq!(same(&small), [StrategyId::GlowOff]);
-        assert_eq!(same(&open), [StrategyId::GlowOff]);
-        assert_eq!(same(&large), Vec::<StrategyId>::new());
+        // NEE with MIS is the default's estimator wherever NEE has its
+        // control variate, as every default does.
+        assert_eq!(same(&small), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        assert_eq!(same(&open), [StrategyId::NeeMis, StrategyId::GlowOff]);
+        assert_eq!(same(&large), [StrategyId::NeeMis]);
+        let without_control = |f: u32| f & !FLAG_NEE_CONTROL;
+        assert_ne!(
+            image_flags(without_control(large.default_flags()) | FLAG_MIS),
+            without_control(large.default_flags())
+        );
         // Switching the share turns the lobe on at the light's share where
         // the default has none, and swaps a quarter and a tenth elsewhere.
         let switched = |scene: &pt_render::Scene| {
@@ -384,6 +404,35 @@ mod tests {
             assert_ne!(scene.default_flags() & FLAG_LIGHT_EDGE, 0);
             assert_eq!(edge, scene.default_flags() & !FLAG_LIGHT_EDGE);
         }
+    }
+
+    /// What `image_flags` drops changes no sample: the CPU renders the same
+    /// sums bit for bit with and without MIS where NEE has its control
+    /// variate, on a small light (connections), a large one and one in the
+    /// open, and different sums without the control variate, where MIS
+    /// weighs the cones that cross the horizon.
+    #[test]
+    fn mis_beside_nees_control_variate_renders_the_same_samples() {
+        let small = pt_render::Scene::default_scene();
+        let mut large = small.clone();
+        (large.light.radius, large.light.center.y) = (0.5, 1.35);
+        let mut open = small.clone();
+        (open.light.radius, open.light.center.y) = (0.25, 1.0);
+        let settings = pt_render::RenderSettings { width: 24, height: 24, ..small.render };
+        let sums = |scene: &pt_render::Scene, flags: u32| {
+            let params = scene.frame_params_with_flags(&settings, 4, 7, flags);
+            let mut r = pt_render::CpuRenderer::new(params, &scene.gpu_walls(), &scene.gpu_spheres()).unwrap();
+            r.render_frame(4);
+            r.accum().iter().map(|p| p.sum).collect::<Vec<_>>()
+        };
+        for scene in [&small, &large, &open] {
+            let f = scene.default_flags();
+            assert!(pt_core::integrator::nee_control(f));
+            assert_eq!(image_flags(f | FLAG_MIS), f);
+            assert_eq!(sums(scene, f), sums(scene, f | FLAG_MIS));
+        }
+        let f = large.default_flags() & !FLAG_NEE_CONTROL;
+        assert_ne!(sums(&large, f), sums(&large, f | FLAG_MIS));
     }
 
     #[test]
