@@ -10,12 +10,14 @@
 #   scripts/performance_report.sh spheres  the scenes with more spheres only
 #   scripts/performance_report.sh contact  the scenes where walls cut the
 #                                          light or spheres only
+#   scripts/performance_report.sh random   the rooms made at random by
+#                                          scripts/random_rooms.py only
 #   scripts/performance_report.sh DIR [OUT_DIR]
 #                                          any other folder of scenes (new
 #                                          rooms, say), into OUT_DIR
 #                                          (target/bench/NAME by default)
 #                                          with its report OUT_DIR/report.md
-#   scripts/performance_report.sh rebuild  the five suites' sections again
+#   scripts/performance_report.sh rebuild  the six suites' sections again
 #                                          from their runs' points, measuring
 #                                          nothing (after a change to the
 #                                          report's tables)
@@ -70,13 +72,13 @@ measure_suite() {
 
 case "${1:-all}" in
     rebuild)
-        for which in "" holdout probe spheres contact; do
+        for which in "" holdout probe spheres contact random; do
             suite_of "$which"
             "$bin" bench convergence "${args[@]}" --mitsuba-dir "$mitsuba" --report "$report" --from-csv
         done
         exit 0
         ;;
-    holdout | probe | spheres | contact)
+    holdout | probe | spheres | contact | random)
         measure_suite "$1"
         exit 0
         ;;

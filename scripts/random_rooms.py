@@ -17,6 +17,7 @@ import argparse
 import math
 import os
 import random
+import sys
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 ALBEDOS = [[0.73, 0.73, 0.73], [0.2, 0.4, 0.8], [0.8, 0.6, 0.2], [0.3, 0.7, 0.3], [0.9, 0.9, 0.9], [0.5, 0.2, 0.6]]
@@ -88,7 +89,14 @@ def main():
         radiance = 20.0 * 0.15**2 / lr**2
         g = min(math.dist(lc, c) - r for c, r in spheres)
         spot = 20 / (4 * math.pi * g * g)
-        s = f"# stresses: random room {k}: light r={lr:.3f}, gap to sphere {g:.3f} (spot {spot:.0f}), {n} spheres.\n\n"
+        where = "anywhere in the room" if anywhere else "beside the first sphere"
+        at = ", ".join(f"{x:.2f}" for x in lc)
+        counted = "1 sphere" if n == 1 else f"{n} spheres"
+        s = (
+            f"# stresses: random room {k}: a light of radius {lr:.3f} {where}, at ({at}), {g:.3f} from the"
+            f" nearest sphere (spot {spot:.0f}); {counted}.\n"
+        )
+        s += f"# Made by scripts/random_rooms.py {' '.join(sys.argv[2:])}.\n\n"
         s += "background = [0.0, 0.0, 0.0]\n\n[camera]\nposition = [0.0, 1.0, 3.4]\nlook_at = [0.0, 1.0, 0.0]\n"
         s += "up = [0.0, 1.0, 0.0]\nvfov_degrees = 40.0\n\n"
         s += "[render]\nwidth = 128\nheight = 128\nspp = 256\nmax_bounces = 5\n\n"
