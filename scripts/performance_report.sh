@@ -44,8 +44,10 @@ agreement() {
 # One suite's bench arguments, its folder, Mitsuba's folder and its report:
 # the scene suite (scenes/, docs/PERFORMANCE.md) for "", else the held-out
 # scenes (scenes/holdout/), the probes (scenes/probe/), the scenes with
-# more spheres (scenes/spheres/) or those where walls cut the light or
-# spheres (scenes/contact/) in their own report, docs/bench/NAME.md.
+# more spheres (scenes/spheres/), those where walls cut the light or
+# spheres (scenes/contact/) or the rooms made at random (scenes/random/)
+# in their own report, docs/bench/NAME.md; or any other folder of scenes,
+# into OUT_DIR (the second argument) with OUT_DIR/report.md.
 suite_of() {
     if [ -d "$1" ]; then
         dir=${2:-target/bench/$(basename "$1")}
