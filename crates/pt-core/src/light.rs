@@ -7,7 +7,7 @@ use spirv_std::num_traits::Float;
 use bytemuck::{Pod, Zeroable};
 use spirv_std::glam::Vec3;
 
-use crate::sampling::{PI, about_axis, orthonormal_basis, sin_cos_of_turn};
+use crate::sampling::{PI, about_axis, exp_f32, ln_f32, orthonormal_basis, sin_cos_of_turn};
 
 /// A spherical light: emits `radiance` from every point of its surface,
 /// outward, and reflects nothing.
@@ -234,7 +234,7 @@ impl GlowLobe {
     pub fn new(cone: &LightCone) -> Self {
         let scale = cone.one_minus_cos_max.max(GLOW_MIN_SCALE);
         let reach = scale + GLOW_REACH;
-        Self { axis: cone.axis, scale, reach, log_ratio: (reach / scale).ln() }
+        Self { axis: cone.axis, scale, reach, log_ratio: ln_f32(reach / scale) }
     }
 
     /// The lobe's axis: the direction of the light's centre.
@@ -252,7 +252,7 @@ impl GlowLobe {
     /// 1 - cos` on [e, reach] is `1 / (x ln(reach / e))`, whose inverse CDF
     /// is `x = e exp(u1 ln(reach / e))`.
     pub fn polar(&self, u1: f32) -> (f32, f32) {
-        let x = (self.scale * (u1 * self.log_ratio).exp()).min(self.reach);
+        let x = (self.scale * exp_f32(u1 * self.log_ratio)).min(self.reach);
         (1.0 - x, (x * (2.0 - x)).max(0.0).sqrt())
     }
 

@@ -41,6 +41,120 @@ pub fn sin_cos_of_turn(u: f32) -> (f32, f32) {
     }
 }
 
+/// `ln x` and `exp x` for the glow lobe (`light::GlowLobe`): the shader's
+/// own functions in the kernel, [`ln_poly`] and [`exp_poly`] on the CPU,
+/// where libm's were a call per lane in the eight-lane path loop and nearly
+/// all of the lobe's extra time per sample there.
+#[inline(always)]
+pub fn ln_f32(x: f32) -> f32 {
+    #[cfg(target_arch = "spirv")]
+    {
+        x.ln()
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        ln_poly(x)
+    }
+}
+
+/// See [`ln_f32`].
+#[inline(always)]
+pub fn exp_f32(x: f32) -> f32 {
+    #[cfg(target_arch = "spirv")]
+    {
+        x.exp()
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        exp_poly(x)
+    }
+}
+
+/// `ln 2` in two parts: `LN_2_HI` has 16 significant bits, so `k LN_2_HI`
+/// is exact for the exponents `k` of f32, and `LN_2_LO` is the rest.
+#[cfg(not(target_arch = "spirv"))]
+const LN_2_HI: f32 = 0.693_145_75;
+#[cfg(not(target_arch = "spirv"))]
+const LN_2_LO: f32 = 1.428_606_8e-6;
+
+/// `ln x` for a normal `x > 0` on the CPU: `x = m 2^k` with `m` in
+/// [sqrt(1/2), sqrt(2)] ([`ln_split`]), then [`ln_reduced`]. Within 2 ulp
+/// of the true value on the glow lobe's domain (the tests check).
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn ln_poly(x: f32) -> f32 {
+    let (m, k) = ln_split(x);
+    ln_reduced(m, k)
+}
+
+/// `(m, k)` with `x = m 2^k` and `m` in [sqrt(1/2), sqrt(2)], for a
+/// normal `x > 0`: the exponent and mantissa bits, exactly.
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn ln_split(x: f32) -> (f32, f32) {
+    let bits = x.to_bits();
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+    let k = ((bits >> 23) & 0xff) as i32 - 127;
+    if m > core::f32::consts::SQRT_2 { (m * 0.5, (k + 1) as f32) } else { (m, k as f32) }
+}
+
+/// `ln(m 2^k)` for `m` in [sqrt(1/2), sqrt(2)]: `k ln 2 + 2 atanh(s)`, `s =
+/// (m - 1) / (m + 1)` (`m - 1` is exact there, and `|s| <= 0.172`), by the
+/// series of `atanh` to `s^9` (the first term left out is below 1e-9).
+/// Generic so that the eight-lane path loop (`pt_render::lanes`) runs
+/// these very operations on its vectors and gets [`ln_poly`]'s bits.
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn ln_reduced<T>(m: T, k: T) -> T
+where
+    T: Copy + core::ops::Add<Output = T> + core::ops::Mul<Output = T> + core::ops::Div<Output = T>,
+    T: core::ops::Add<f32, Output = T> + core::ops::Sub<f32, Output = T> + core::ops::Mul<f32, Output = T>,
+{
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    let tail = s2 * (s2 * (s2 * (s2 * (1.0 / 9.0) + 1.0 / 7.0) + 1.0 / 5.0) + 1.0 / 3.0);
+    let twice = s * 2.0;
+    k * LN_2_HI + (twice + twice * tail + k * LN_2_LO)
+}
+
+/// `exp x` for `|x| < 87` on the CPU: `x = k ln 2 + r` with `|r| <= ln 2 /
+/// 2` ([`exp_split`] gives `k` and `2^k`), then [`exp_reduced`]. Within 2
+/// ulp of the true value on the glow lobe's domain (the tests check).
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn exp_poly(x: f32) -> f32 {
+    let (k, two_k) = exp_split(x);
+    exp_reduced(x, k, two_k)
+}
+
+/// `(k, 2^k)`, `k` the integer nearest `x / ln 2`, held to the exponents
+/// of normal f32 (a NaN gives `k` NaN and `2^k` 1).
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn exp_split(x: f32) -> (f32, f32) {
+    let k = (x * core::f32::consts::LOG2_E).round_ties_even().clamp(-126.0, 127.0);
+    (k, f32::from_bits(((k as i32 + 127) as u32) << 23))
+}
+
+/// `exp x` from [`exp_split`]'s `k` and `2^k`: `2^k exp(r)`, `r = x - k ln
+/// 2` (in two parts, exact to f32), `exp(r)` by its Taylor polynomial to
+/// `r^7` (the first term left out is below 6e-9). Generic as
+/// [`ln_reduced`] is.
+#[cfg(not(target_arch = "spirv"))]
+#[inline(always)]
+pub fn exp_reduced<T>(x: T, k: T, two_k: T) -> T
+where
+    T: Copy + core::ops::Add<Output = T> + core::ops::Sub<Output = T> + core::ops::Mul<Output = T>,
+    T: core::ops::Add<f32, Output = T> + core::ops::Mul<f32, Output = T>,
+{
+    let r = (x - k * LN_2_HI) - k * LN_2_LO;
+    let p = r
+        * (r * (r * (r * (r * (r * (r * (1.0 / 5040.0) + 1.0 / 720.0) + 1.0 / 120.0) + 1.0 / 24.0) + 1.0 / 6.0) + 0.5)
+            + 1.0)
+        + 1.0;
+    p * two_k
+}
+
 /// `(sin a, cos a)` for |a| <= pi/4 by their Taylor polynomials, to `a^9`
 /// and `a^10` (the first terms left out are below 2e-9 and 3e-9), in
 /// Horner's form. Generic so that the CPU's eight-lane path loop
@@ -155,6 +269,32 @@ mod tests {
 
     /// `sin_cos_turn` against f64 sine and cosine at a million points of
     /// [0, 1) and at the quarter turns, where the rounding of `4u` changes.
+    /// `ln_poly` and `exp_poly` against f64 on the glow lobe's domain: the
+    /// lobe's `reach / scale` from 1 to `1 + GLOW_REACH / GLOW_MIN_SCALE`
+    /// (about 1.25e5) and `exp` of `u ln` of it, at a million points each,
+    /// within 2 ulp (and exact at 1 and 0).
+    #[test]
+    fn ln_and_exp_polynomials_are_within_two_ulps() {
+        let ulp = |v: f64| (v.abs() as f32).max(f32::MIN_POSITIVE).to_bits();
+        let close = |got: f32, want: f64| {
+            let one = f32::from_bits(ulp(want) + 1) as f64 - f32::from_bits(ulp(want)) as f64;
+            (got as f64 - want).abs() <= 2.0 * one
+        };
+        let top = 1.0 + crate::light::GLOW_REACH / crate::light::GLOW_MIN_SCALE;
+        for i in 0..1_000_000u32 {
+            let x = (top.ln() * i as f32 / 1e6).exp().max(1.0);
+            let l = ln_poly(x);
+            assert!(close(l, (x as f64).ln()) || (x == 1.0 && l == 0.0), "ln {x}: {l}");
+            let y = top.ln() * i as f32 / 1e6;
+            assert!(close(exp_poly(y), (y as f64).exp()), "exp {y}: {}", exp_poly(y));
+            // Arguments below 1 and negative ones, for the rest of the range.
+            let z = 1e-3 + i as f32 * 1e-6;
+            assert!(close(ln_poly(z), (z as f64).ln()), "ln {z}");
+            assert!(close(exp_poly(-y), (-y as f64).exp()), "exp {}", -y);
+        }
+        assert_eq!((ln_poly(1.0), exp_poly(0.0)), (0.0, 1.0));
+    }
+
     #[test]
     fn sin_cos_turn_is_within_a_few_ulps() {
         let check = |u: f32| {

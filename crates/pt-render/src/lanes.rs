@@ -13,7 +13,8 @@
 //! code's floating-point operations in the same order (no fused
 //! multiply-adds; sine and cosine by the polynomial of
 //! [`pt_core::sampling::sin_cos_turn`], the logarithm and exponential of
-//! the glow lobe by libm, lane by lane), draws the same random numbers, and
+//! the glow lobe by those of [`pt_core::sampling::ln_poly`] and
+//! [`pt_core::sampling::exp_poly`]), draws the same random numbers, and
 //! ends and restarts its paths where the scalar loop does. Each pixel's
 //! samples are therefore bit for bit what
 //! [`pt_core::integrator::render_pixel`] returns, which the tests check on
@@ -40,7 +41,7 @@ use pt_core::params::{FLAG_MIS, FLAG_NEE, FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE,
 use pt_core::query::ShadowWalls;
 use pt_core::ray::HIT_ERROR_EPS;
 use pt_core::sampler::{JOINT_TRANSFORMS, SOBOL_DRAWS, all_draws_joint, joint_draws};
-use pt_core::sampling::{PI, sin_cos_taylor};
+use pt_core::sampling::{PI, exp_reduced, exp_split, ln_reduced, ln_split, sin_cos_taylor};
 use pt_core::wall::EDGE_SLACK;
 
 /// Paths per group: the eight f32 lanes of an AVX2 register.
@@ -926,9 +927,12 @@ impl Scatter {
         if glow.any() {
             let s = cone.one_minus_cos_max.max(F::splat(GLOW_MIN_SCALE));
             let r = s + GLOW_REACH;
-            // ln only where a lane builds the lobe, as the scalar loop does.
-            let (ratio, on) = ((r / s).to_array(), U(glow.0).to_array());
-            let l = F::from_array(from_fn(|i| if on[i] != 0 { ratio[i].ln() } else { 1.0 }));
+            // ln_poly's operations: its exponent and mantissa split lane by
+            // lane, its polynomial on the vectors (lanes without the lobe
+            // compute it too, and drop it below).
+            let ratio = (r / s).to_array();
+            let split: [(f32, f32); 8] = from_fn(|i| ln_split(ratio[i]));
+            let l = ln_reduced(F::from_array(from_fn(|i| split[i].0)), F::from_array(from_fn(|i| split[i].1)));
             scale = sel(glow, s, scale);
             reach = sel(glow, r, reach);
             log_ratio = sel(glow, l, log_ratio);
@@ -948,10 +952,12 @@ impl Scatter {
         let mut sin_theta = ((u1 - p) / (1.0 - p)).sqrt();
         let mut axis = self.n;
         if pick.any() {
-            // GlowLobe::polar(u1 / p); exp only where a lane picked the lobe.
-            let v = u1 / p;
-            let (v, l, pick_lanes) = (v.to_array(), self.log_ratio.to_array(), U(pick.0).to_array());
-            let e = F::from_array(from_fn(|i| if pick_lanes[i] != 0 { (v[i] * l[i]).exp() } else { 0.0 }));
+            // GlowLobe::polar(u1 / p), with exp_poly's operations as ln's
+            // above (lanes that did not pick the lobe drop theirs below).
+            let arg = u1 / p * self.log_ratio;
+            let args = arg.to_array();
+            let split: [(f32, f32); 8] = from_fn(|i| exp_split(args[i]));
+            let e = exp_reduced(arg, F::from_array(from_fn(|i| split[i].0)), F::from_array(from_fn(|i| split[i].1)));
             let x = (self.scale * e).min(self.reach);
             cos_theta = sel(pick, 1.0 - x, cos_theta);
             sin_theta = sel(pick, (x * (2.0 - x)).max(F::splat(0.0)).sqrt(), sin_theta);
