@@ -24,7 +24,7 @@ use pt_core::params::{
     FLAG_NEE_PROJECTED, FLAG_RR_LUMINANCE, FLAG_SOBOL, FLAG_SOBOL_DEEP,
 };
 use pt_render::scene::DEFAULT_RR_START;
-use pt_render::strategy::with_connections;
+use pt_render::strategy::{sample_flags, with_connections};
 
 /// Which backend a measurement ran on.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -158,25 +158,15 @@ impl Strategy {
     /// Whether this strategy, not the default itself, renders `scene` just
     /// as the default does, the same samples bit for bit (NEE with MIS
     /// where the scene's default has MIS, or has NEE's control variate:
-    /// [`image_flags`]): timing it again would measure only the machine's
+    /// [`sample_flags`]): timing it again would measure only the machine's
     /// noise, and the fastest of a dozen noisy timings would then be a
     /// twin of the default.
     pub fn same_as_default_on(&self, scene: &pt_render::Scene) -> bool {
         let d = StrategyId::Default.strategy();
         self.id != StrategyId::Default
-            && image_flags(self.flags_for(scene)) == image_flags(d.flags_for(scene))
+            && sample_flags(self.flags_for(scene)) == sample_flags(d.flags_for(scene))
             && (self.rr_start, self.spp_per_frame) == (d.rr_start, d.spp_per_frame)
     }
-}
-
-/// Integrator `flags` without the bits that change no sample: MIS where
-/// NEE takes the control variate ([`pt_core::integrator::nee_control`]).
-/// There NEE takes all of the light at every vertex whose light cone is
-/// not empty, so a BSDF ray that reaches the light weighs 0 with MIS or
-/// without, and a vertex whose cone is empty has no NEE sample to weigh
-/// (its BSDF ray takes the whole light either way).
-pub fn image_flags(flags: u32) -> u32 {
-    if pt_core::integrator::nee_control(flags) { flags & !FLAG_MIS } else { flags }
 }
 
 /// Samples per pixel per frame of `render` and of the default strategy.
@@ -364,8 +354,8 @@ mod tests {
         assert_eq!(same(&large), [StrategyId::NeeMis]);
         let without_control = |f: u32| f & !FLAG_NEE_CONTROL;
         assert_ne!(
-            image_flags(without_control(large.default_flags()) | FLAG_MIS),
-            without_control(large.default_flags())
+            sample_flags(without_control(large.default_flags()) | FLAG_MIS),
+            sample_flags(without_control(large.default_flags()))
         );
         // Switching the share turns the lobe on at the light's share where
         // the default has none, and swaps a quarter and a tenth elsewhere.
@@ -406,11 +396,12 @@ mod tests {
         }
     }
 
-    /// What `image_flags` drops changes no sample: the CPU renders the same
+    /// What `sample_flags` drops changes no sample: the CPU renders the same
     /// sums bit for bit with and without MIS where NEE has its control
     /// variate, on a small light (connections), a large one and one in the
-    /// open, and different sums without the control variate, where MIS
-    /// weighs the cones that cross the horizon.
+    /// open, and with and without the lobe's share where the lobe is off;
+    /// and different sums with and without MIS without the control
+    /// variate, where MIS weighs the cones that cross the horizon.
     #[test]
     fn mis_beside_nees_control_variate_renders_the_same_samples() {
         let small = pt_render::Scene::default_scene();
@@ -428,9 +419,18 @@ mod tests {
         for scene in [&small, &large, &open] {
             let f = scene.default_flags();
             assert!(pt_core::integrator::nee_control(f));
-            assert_eq!(image_flags(f | FLAG_MIS), f);
+            assert_eq!(sample_flags(f | FLAG_MIS), sample_flags(f));
             assert_eq!(sums(scene, f), sums(scene, f | FLAG_MIS));
+            // The lobe's share means nothing without the lobe.
+            if f & FLAG_GLOW == 0 {
+                assert_eq!(sample_flags(f ^ FLAG_GLOW_SPARSE), sample_flags(f));
+                assert_eq!(sums(scene, f), sums(scene, f ^ FLAG_GLOW_SPARSE));
+            }
         }
+        // The small light's default has connections and no lobe; the one
+        // in the open has neither: both toggled the share above.
+        assert_eq!(small.default_flags() & FLAG_GLOW, 0);
+        assert_eq!(open.default_flags() & FLAG_GLOW, 0);
         let f = large.default_flags() & !FLAG_NEE_CONTROL;
         assert_ne!(sums(&large, f), sums(&large, f | FLAG_MIS));
     }

@@ -64,11 +64,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             hex => u32::from_str_radix(hex.trim_start_matches("0x"), 16)?,
         })
     };
-    // The glow lobe's share bit means nothing with the lobe off.
-    let same = |a: u32, b: u32| {
-        let norm = |f: u32| if f & FLAG_GLOW == 0 { f & !FLAG_GLOW_SPARSE } else { f };
-        norm(a) == norm(b)
-    };
+    let same = |a: u32, b: u32| st::sample_flags(a) == st::sample_flags(b);
     println!(
         "default flags {default:#x} sphere_spot {:.1} wall_spot {:.1} corner {:.1} wall_share {:.3} extent {:.4} clearance {:.2}",
         st::sphere_hot_spot(&scene),

@@ -79,8 +79,8 @@
 use pt_core::glam::Vec3;
 use pt_core::light::light_cone;
 use pt_core::params::{
-    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED, FLAG_SOBOL_DEEP,
-    FLAGS_DEFAULT,
+    FLAG_CONNECT, FLAG_GLOW, FLAG_GLOW_SPARSE, FLAG_LIGHT_EDGE, FLAG_MIS, FLAG_NEE_CONTROL, FLAG_NEE_PROJECTED,
+    FLAG_SOBOL_DEEP, FLAGS_DEFAULT,
 };
 use pt_core::query::{Hit, HitKind};
 use pt_core::ray::Ray;
@@ -636,6 +636,26 @@ fn sampling_rule(scene: &Scene) -> u32 {
 /// `flags` with the glow lobe on at a quarter of the BSDF samples.
 fn at_a_quarter(flags: u32) -> u32 {
     (flags & !FLAG_GLOW_SPARSE) | FLAG_GLOW
+}
+
+/// Integrator `flags` without the bits that change no sample: two flag
+/// sets with equal `sample_flags` render the same samples bit for bit.
+/// The glow lobe's share (`FLAG_GLOW_SPARSE`) means nothing without the
+/// lobe; and where NEE takes the control variate
+/// ([`pt_core::integrator::nee_control`]), NEE takes all of the light at
+/// every vertex whose light cone is not empty, so a BSDF ray that reaches
+/// the light weighs 0 with `FLAG_MIS` or without, and a vertex whose cone
+/// is empty has no NEE sample to weigh (its BSDF ray takes the whole light
+/// either way).
+pub fn sample_flags(flags: u32) -> u32 {
+    let mut f = flags;
+    if f & FLAG_GLOW == 0 {
+        f &= !FLAG_GLOW_SPARSE;
+    }
+    if pt_core::integrator::nee_control(f) {
+        f &= !FLAG_MIS;
+    }
+    f
 }
 
 /// `flags` with connections in the glow lobe's place.
