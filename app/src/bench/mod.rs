@@ -330,15 +330,15 @@ mod tests {
     fn only_a_strategy_that_changes_nothing_on_a_scene_is_the_default_there() {
         let small = pt_render::Scene::default_scene();
         let mut large = small.clone();
-        large.light.radius = 0.5;
-        large.light.center.y = 1.35;
+        large.light.radius = 0.3;
+        large.light.center = pt_core::glam::Vec3::new(0.6, 1.6, -0.6);
         let mut open = small.clone();
         open.light.radius = 0.25;
         open.light.center.y = 1.0;
-        // The small light's default has connections; the large and open
-        // lights' have the glow lobe at a tenth and none (the rule in
-        // pt_render::strategy). No default has MIS: with NEE's control
-        // variate NEE takes all of the light.
+        // The small light's default has connections; the large light's, in
+        // a corner, the glow lobe at a quarter, and the open light's none
+        // (the pilot's choices in pt_render::strategy). No default has
+        // MIS: with NEE's control variate NEE takes all of the light.
         for scene in [&small, &large, &open] {
             assert_eq!(scene.default_flags() & FLAG_MIS, 0);
         }
@@ -364,7 +364,8 @@ mod tests {
         };
         assert_eq!(pt_core::bsdf::glow_probability(open.default_flags()), 0.0);
         assert_eq!(switched(&open), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
-        assert_eq!(switched(&large), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(pt_core::bsdf::glow_probability(large.default_flags()), pt_core::bsdf::GLOW_PROBABILITY);
+        assert_eq!(switched(&large), pt_core::bsdf::GLOW_PROBABILITY_SPARSE);
         assert_eq!(switched(&small), pt_core::bsdf::GLOW_PROBABILITY);
         // Switching the connections gives the glow-lobe rule where the
         // default has them, and them in the lobe's place (with Sobol for
@@ -406,7 +407,7 @@ mod tests {
     fn mis_beside_nees_control_variate_renders_the_same_samples() {
         let small = pt_render::Scene::default_scene();
         let mut large = small.clone();
-        (large.light.radius, large.light.center.y) = (0.5, 1.35);
+        (large.light.radius, large.light.center) = (0.3, pt_core::glam::Vec3::new(0.6, 1.6, -0.6));
         let mut open = small.clone();
         (open.light.radius, open.light.center.y) = (0.25, 1.0);
         let settings = pt_render::RenderSettings { width: 24, height: 24, ..small.render };

@@ -20,6 +20,8 @@
 //! `cv`, `edge`, `sobol` and `proj` for NEE's control variate, the light
 //! edge's, Sobol for every draw and NEE by projected solid angle, each
 //! switched); or flags in hex. A `*` marks the strategy that is the scene's default.
+//! The header gives the scene's features that the default rule reads and
+//! the glow-lobe pilot's figures (`strategy::glow_pilot`).
 
 use std::error::Error;
 use std::path::Path;
@@ -74,6 +76,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         st::light_extent(&scene),
         st::surface_clearance(&scene),
     );
+    if let Some(p) = st::glow_pilot(&scene) {
+        println!(
+            "pilot relMSE*spp: no lobe {:.4}, a tenth {:.3}x and a quarter {:.3}x of it",
+            p.none,
+            p.tenth / p.none,
+            p.quarter / p.none
+        );
+    }
     let names: Vec<&str> = strategies.split(',').collect();
     let all: Vec<u32> = names.iter().map(|n| flags(n)).collect::<Result<_, _>>()?;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
