@@ -285,6 +285,28 @@ pub const WALL_HOT_SPOT: f32 = 15.0;
 /// ([`CONNECT_MAX_SPHERE_SHARE`]).
 pub const CONNECT_MIN_WALL_SHARE: f32 = 0.69;
 
+/// The smallest hot spot of the hottest wall ([`hottest_wall_spot`]) at
+/// which connections take the glow lobe's place around a small light.
+/// Connections pick wall points by the light's directions, which pays
+/// where the light makes some wall far brighter than the rest; where it
+/// lights every wall about evenly, from the middle of the room, they cost
+/// their rays and find little that the BSDF rays miss. Measured with
+/// `examples/strategy_probe.rs` (CPU, 128x128, 64 or 256 spp, 4 to 8
+/// seeds) on 58 rooms whose small light took connections by the rules
+/// here (the scenes of `scenes/` and rooms of `scripts/random_rooms.py`):
+/// around the three whose hottest wall had a spot of
+/// 1.8 to 2.5 (lights of radius 0.03 to 0.1, 5 to 23 radii from every
+/// surface), the fastest choice with connections took 1.11x to 1.46x the
+/// time of the fastest without; from a spot of 4.4 up (the held-out light
+/// at the front at mid height, 0.92x), connections took 0.36x to 1.01x on
+/// all but four (1.06x to 1.35x, at spots of 5.5 to 64). The bound sits
+/// between 2.5 and 4.4, geometrically. It changes one scene of `scenes/`,
+/// set after it: random room01 (a light of radius 0.076 at a spot of
+/// 2.7, 8.6 radii from every surface) takes neither connections nor the
+/// lobe, and with connections it took 1.21x that time on the CPU and
+/// 1.07x on lavapipe (64 spp, 8 seeds).
+pub const CONNECT_MIN_WALL_SPOT: f32 = 3.3;
+
 /// The share of the light's directions that meet a sphere first
 /// ([`sphere_share`]) from which a wall share below
 /// [`CONNECT_MIN_WALL_SHARE`] keeps a small light from connections. Below
@@ -618,12 +640,14 @@ fn sampling_rule(scene: &Scene) -> u32 {
     }
     let sphere_hot = sphere >= SPHERE_HOT_SPOT;
     // Beside a hot sphere the walls decide: connections where one is hot
-    // too. Elsewhere a low wall share keeps them off where the spheres
+    // too. Elsewhere connections need a wall that the light makes hotter
+    // than the rest, and a low wall share keeps them off where the spheres
     // catch the light the walls miss, not where it leaves by the open side.
     let without_connections = if sphere_hot {
         wall < WALL_HOT_SPOT
     } else {
-        wall_share(scene) < CONNECT_MIN_WALL_SHARE && sphere_share(scene) >= CONNECT_MAX_SPHERE_SHARE
+        wall < CONNECT_MIN_WALL_SPOT
+            || wall_share(scene) < CONNECT_MIN_WALL_SHARE && sphere_share(scene) >= CONNECT_MAX_SPHERE_SHARE
     };
     if without_connections {
         // A small light keeps the glow lobe only near a wall or a sphere.
@@ -1114,13 +1138,40 @@ mod tests {
     }
 
     #[test]
+    fn connections_need_a_wall_the_light_makes_hot() {
+        // A light of radius 0.05 in the middle of the room: every wall's
+        // nearest point 1 or more away, the hottest a spot of 20 / (4 pi),
+        // and the large sphere 8 radii away. Neither connections nor the
+        // glow lobe.
+        let middle = with_light(0.05, Vec3::new(0.0, 1.0, 0.0));
+        let spot = hottest_wall_spot(&middle);
+        assert!((spot - 20.0 / (4.0 * std::f32::consts::PI)).abs() < 1e-4, "{spot}");
+        assert!(spot < CONNECT_MIN_WALL_SPOT);
+        assert!(wall_share(&middle) >= CONNECT_MIN_WALL_SHARE);
+        assert!(sphere_hot_spot(&middle) < SPHERE_HOT_SPOT);
+        assert!(surface_clearance(&middle) > SMALL_OPEN_CLEARANCE);
+        assert_eq!(default_flags(&middle), in_the_open());
+        // So for random room01, a light of radius 0.076 at a spot of 2.7.
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/random");
+        let room01 = Scene::load(&dir.join("room01.toml")).unwrap();
+        assert!((2.6..2.8).contains(&hottest_wall_spot(&room01)), "{}", hottest_wall_spot(&room01));
+        assert_eq!(default_flags(&room01), in_the_open());
+        // Raised to 0.45 below the ceiling (a spot of 7.9): connections.
+        let higher = with_light(0.05, Vec3::new(0.0, 1.55, 0.0));
+        assert!(hottest_wall_spot(&higher) > CONNECT_MIN_WALL_SPOT);
+        assert_eq!(default_flags(&higher), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
+    }
+
+    #[test]
     fn a_low_wall_share_keeps_connections_off_only_where_the_spheres_catch_the_light() {
         // The default room: about 0.03 of the directions meet a sphere.
         let default = Scene::default_scene();
         assert!((sphere_share(&default) - 0.030).abs() < 0.005, "{}", sphere_share(&default));
-        // Near the open front, above the spheres: 0.60 meet a wall, 0.034
-        // a sphere; the rest leave the room. Connections.
-        let front = with_light(0.05, Vec3::new(0.0, 1.3, 0.7));
+        // Near the open front, above the spheres, 0.6 below the ceiling (a
+        // spot of 4.4): 0.60 meet a wall, 0.03 a sphere; the rest leave the
+        // room. Connections.
+        let front = with_light(0.05, Vec3::new(0.0, 1.4, 0.7));
+        assert!(hottest_wall_spot(&front) > CONNECT_MIN_WALL_SPOT);
         assert!(wall_share(&front) < CONNECT_MIN_WALL_SHARE);
         assert!(sphere_share(&front) < CONNECT_MAX_SPHERE_SHARE);
         assert_eq!(default_flags(&front), with_connections(BASE_FLAGS) | FLAG_SOBOL_DEEP);
