@@ -84,6 +84,12 @@ fn main() -> Result<(), Box<dyn Error>> {
             p.quarter / p.none
         );
     }
+    let beside = base | FLAG_CONNECT | FLAG_SOBOL_DEEP;
+    if st::connections_apply(&scene)
+        && let Some(r) = st::pilot_relmse(&scene, &[beside | FLAG_GLOW_SPARSE, beside])
+    {
+        println!("pilot beside connections: a tenth {:.4}, a quarter {:.3}x of it", r[0], r[1] / r[0]);
+    }
     let names: Vec<&str> = strategies.split(',').collect();
     let all: Vec<u32> = names.iter().map(|n| flags(n)).collect::<Result<_, _>>()?;
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());

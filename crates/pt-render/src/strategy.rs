@@ -777,13 +777,26 @@ fn pilot_choice(scene: &Scene) -> u32 {
 /// (eight lanes or one). `None` where the CPU renderer cannot take the
 /// scene.
 pub fn glow_pilot(scene: &Scene) -> Option<GlowPilot> {
+    let base = pilot_base(scene, BASE_FLAGS);
+    let rel = pilot_relmse(scene, &[base & !FLAG_GLOW, base | FLAG_GLOW_SPARSE, base])?;
+    Some(GlowPilot { none: rel[0], tenth: rel[1], quarter: rel[2] })
+}
+
+/// `flags` with the light edge's bit as [`default_flags`] leaves it on
+/// `scene` ([`silhouette_in_view`]).
+fn pilot_base(scene: &Scene, flags: u32) -> u32 {
+    let edge = if silhouette_in_view(scene) { FLAG_LIGHT_EDGE } else { 0 };
+    (flags & !FLAG_LIGHT_EDGE) | edge
+}
+
+/// The pilot's measurement ([`glow_pilot`]) of each of `choices`: its
+/// relMSE per sample, against the mean of all of their renders. `None`
+/// where the CPU renderer cannot take the scene.
+pub fn pilot_relmse(scene: &Scene, choices: &[u32]) -> Option<Vec<f64>> {
     let (width, height) = (scene.render.width.max(1), scene.render.height.max(1));
     let scale = PILOT_SIDE as f32 / width.max(height) as f32;
     let side = |n: u32| ((n as f32 * scale).round() as u32).max(1);
     let settings = RenderSettings { width: side(width), height: side(height), spp: PILOT_SPP, ..scene.render };
-    let edge = if silhouette_in_view(scene) { FLAG_LIGHT_EDGE } else { 0 };
-    let base = (BASE_FLAGS & !FLAG_LIGHT_EDGE) | edge;
-    let choices = [base & !FLAG_GLOW, base | FLAG_GLOW_SPARSE, base];
     let (walls, spheres) = (scene.gpu_walls(), scene.gpu_spheres());
     let values = (settings.width * settings.height * 3) as usize;
     // Per choice, the sum and the sum of squares of each pixel's channels
@@ -802,7 +815,7 @@ pub fn glow_pilot(scene: &Scene) -> Option<GlowPilot> {
         }
     }
     let n = PILOT_RENDERS as f64;
-    let mut rel = [0.0f64; 3];
+    let mut rel = vec![0.0f64; choices.len()];
     for i in 0..values {
         let mean = sums.iter().map(|(s, _)| s[i]).sum::<f64>() / (n * choices.len() as f64);
         let scale = PILOT_SPP as f64 / (mean * mean + 0.01) / values as f64;
@@ -811,7 +824,7 @@ pub fn glow_pilot(scene: &Scene) -> Option<GlowPilot> {
             *r += variance * scale;
         }
     }
-    Some(GlowPilot { none: rel[0], tenth: rel[1], quarter: rel[2] })
+    Some(rel)
 }
 
 /// The flags where the glow lobe does not pay at its full probability.
