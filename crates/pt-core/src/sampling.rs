@@ -267,17 +267,16 @@ mod tests {
         assert!((s2 / count as f64 - 0.5).abs() < 5.0 * 2e-3);
     }
 
-    /// `sin_cos_turn` against f64 sine and cosine at a million points of
-    /// [0, 1) and at the quarter turns, where the rounding of `4u` changes.
     /// `ln_poly` and `exp_poly` against f64 on the glow lobe's domain: the
     /// lobe's `reach / scale` from 1 to `1 + GLOW_REACH / GLOW_MIN_SCALE`
     /// (about 1.25e5) and `exp` of `u ln` of it, at a million points each,
     /// within 2 ulp (and exact at 1 and 0).
     #[test]
     fn ln_and_exp_polynomials_are_within_two_ulps() {
-        let ulp = |v: f64| (v.abs() as f32).max(f32::MIN_POSITIVE).to_bits();
+        // The bits of |want| as an f32, and the spacing of f32 there.
+        let bits = |v: f64| (v.abs() as f32).max(f32::MIN_POSITIVE).to_bits();
         let close = |got: f32, want: f64| {
-            let one = f32::from_bits(ulp(want) + 1) as f64 - f32::from_bits(ulp(want)) as f64;
+            let one = f32::from_bits(bits(want) + 1) as f64 - f32::from_bits(bits(want)) as f64;
             (got as f64 - want).abs() <= 2.0 * one
         };
         let top = 1.0 + crate::light::GLOW_REACH / crate::light::GLOW_MIN_SCALE;
@@ -295,6 +294,8 @@ mod tests {
         assert_eq!((ln_poly(1.0), exp_poly(0.0)), (0.0, 1.0));
     }
 
+    /// `sin_cos_turn` against f64 sine and cosine at a million points of
+    /// [0, 1) and at the quarter turns, where the rounding of `4u` changes.
     #[test]
     fn sin_cos_turn_is_within_a_few_ulps() {
         let check = |u: f32| {
