@@ -22,14 +22,18 @@ pub fn rmse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
     mse(image, reference).sqrt()
 }
 
+/// What the relative metrics add to the reference's value, so that black
+/// pixels do not divide by zero.
+pub const REL_EPSILON: f64 = 0.01;
+
 /// Relative MSE: mean((I - R)^2 / (R^2 + 0.01)).
 pub fn rel_mse(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
-    mean_over(image, reference, |i, r| (i - r) * (i - r) / (r * r + 0.01))
+    mean_over(image, reference, |i, r| (i - r) * (i - r) / (r * r + REL_EPSILON))
 }
 
 /// Mean absolute percentage error: mean(|I - R| / (R + 0.01)).
 pub fn mape(image: &[[f32; 3]], reference: &[[f32; 3]]) -> f64 {
-    mean_over(image, reference, |i, r| (i - r).abs() / (r + 0.01))
+    mean_over(image, reference, |i, r| (i - r).abs() / (r + REL_EPSILON))
 }
 
 /// Mean radiance of each `block` x `block` region, row-major over regions

@@ -570,7 +570,12 @@ pub fn mean_albedo(scene: &Scene) -> f32 {
 /// (`FLAG_GLOW_SPARSE`) stays as the rule sets it, so that switching the
 /// lobe back on gives the share the light calls for.
 pub fn default_flags(scene: &Scene) -> u32 {
-    let flags = sampling_rule(scene);
+    with_the_scenes_edge(scene, sampling_rule(scene))
+}
+
+/// `flags` without the light edge's control variate where something
+/// hides the light's silhouette from the camera ([`silhouette_in_view`]).
+fn with_the_scenes_edge(scene: &Scene, flags: u32) -> u32 {
     if silhouette_in_view(scene) { flags } else { flags & !FLAG_LIGHT_EDGE }
 }
 
@@ -628,16 +633,13 @@ fn sampling_rule(scene: &Scene) -> u32 {
     // The extent, a cone per grid point (1,792 in the default scene),
     // decides both rules here: worked out once.
     let extent = light_extent(scene);
-    let (wall, sphere) = (hottest_wall_spot(scene), sphere_hot_spot(scene));
     let glow = glow_rule(scene, extent);
-    if !connections_apply(scene) {
+    // Where walls can shadow the light, or it looks large: the glow-lobe
+    // rule, without connections.
+    if !connections_apply(scene) || extent > GLOW_MAX_EXTENT {
         return glow;
     }
-    if extent > GLOW_MAX_EXTENT {
-        // A light that looks large: the pilot's choice, without
-        // connections.
-        return glow;
-    }
+    let (wall, sphere) = (hottest_wall_spot(scene), sphere_hot_spot(scene));
     let sphere_hot = sphere >= SPHERE_HOT_SPOT;
     // Beside a hot sphere the walls decide: connections where one is hot
     // too. Elsewhere connections need a wall that the light makes hotter
@@ -770,23 +772,16 @@ fn pilot_choice(scene: &Scene) -> u32 {
 /// per pixel, with the scene's own camera, bounces and light edge
 /// ([`silhouette_in_view`]). Per pixel and channel, the variance of one
 /// choice's renders over the square of the mean of all of them (plus
-/// 0.01, as `metrics::rel_mse`), times the samples per render, averaged
+/// `metrics::REL_EPSILON`, as `metrics::rel_mse`), times the samples per render, averaged
 /// over the image: each choice's relMSE per sample against an estimate of
 /// the image that all of them share. It depends on the scene alone: the
 /// seeds are fixed, and the CPU renders the same samples on every machine
 /// (eight lanes or one). `None` where the CPU renderer cannot take the
 /// scene.
 pub fn glow_pilot(scene: &Scene) -> Option<GlowPilot> {
-    let base = pilot_base(scene, BASE_FLAGS);
+    let base = with_the_scenes_edge(scene, BASE_FLAGS);
     let rel = pilot_relmse(scene, &[base & !FLAG_GLOW, base | FLAG_GLOW_SPARSE, base])?;
     Some(GlowPilot { none: rel[0], tenth: rel[1], quarter: rel[2] })
-}
-
-/// `flags` with the light edge's bit as [`default_flags`] leaves it on
-/// `scene` ([`silhouette_in_view`]).
-fn pilot_base(scene: &Scene, flags: u32) -> u32 {
-    let edge = if silhouette_in_view(scene) { FLAG_LIGHT_EDGE } else { 0 };
-    (flags & !FLAG_LIGHT_EDGE) | edge
 }
 
 /// The pilot's measurement ([`glow_pilot`]) of each of `choices`: its
@@ -818,7 +813,7 @@ pub fn pilot_relmse(scene: &Scene, choices: &[u32]) -> Option<Vec<f64>> {
     let mut rel = vec![0.0f64; choices.len()];
     for i in 0..values {
         let mean = sums.iter().map(|(s, _)| s[i]).sum::<f64>() / (n * choices.len() as f64);
-        let scale = PILOT_SPP as f64 / (mean * mean + 0.01) / values as f64;
+        let scale = PILOT_SPP as f64 / (mean * mean + crate::metrics::REL_EPSILON) / values as f64;
         for (r, (s, q)) in rel.iter_mut().zip(&sums) {
             let variance = ((q[i] - s[i] * s[i] / n) / (n - 1.0)).max(0.0);
             *r += variance * scale;
