@@ -772,12 +772,12 @@ fn pilot_choice(scene: &Scene) -> u32 {
 /// per pixel, with the scene's own camera, bounces and light edge
 /// ([`silhouette_in_view`]). Per pixel and channel, the variance of one
 /// choice's renders over the square of the mean of all of them (plus
-/// `metrics::REL_EPSILON`, as `metrics::rel_mse`), times the samples per render, averaged
-/// over the image: each choice's relMSE per sample against an estimate of
-/// the image that all of them share. It depends on the scene alone: the
-/// seeds are fixed, and the CPU renders the same samples on every machine
-/// (eight lanes or one). `None` where the CPU renderer cannot take the
-/// scene.
+/// `metrics::REL_EPSILON`, as `metrics::rel_mse`), times the samples per
+/// render, averaged over the image: each choice's relMSE per sample
+/// against an estimate of the image that all of them share. It depends on
+/// the scene alone: the seeds are fixed, and the CPU renders the same
+/// samples on every machine (eight lanes or one). `None` where the CPU
+/// renderer cannot take the scene.
 pub fn glow_pilot(scene: &Scene) -> Option<GlowPilot> {
     let base = with_the_scenes_edge(scene, BASE_FLAGS);
     let rel = pilot_relmse(scene, &[base & !FLAG_GLOW, base | FLAG_GLOW_SPARSE, base])?;
