@@ -267,8 +267,9 @@ struct RenderArgs {
 
 #[derive(Copy, Clone, Debug, ValueEnum)]
 enum SamplerArg {
-    /// Owen-scrambled Sobol points (Burley 2020), padded per dimension pair,
-    /// for the first 5 draws of a path; a PCG stream for later draws.
+    /// Sobol points, padded per dimension pair (the index Owen-scrambled,
+    /// the values digitally shifted), for the first 5 draws of a path; a PCG
+    /// stream for later draws.
     Sobol,
     /// Independent PCG streams.
     Independent,

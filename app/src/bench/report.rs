@@ -252,11 +252,11 @@ pub(crate) fn defaults_section(points: &[Point]) -> String {
          the default and make nearly the same image (MIS here, other samples per frame on the CPU) come within \
          the machine's noise of it, and the lowest median can be either; the test that separates a real \
          difference from noise is run for run: alternatives faster than the default in every seed, {verdict}.\n\n\
-         - Samples: Owen-scrambled Sobol (Burley 2020) for every draw of a path where connections are on; \
+         - Samples: randomised Sobol (the index Owen-scrambled, the values digitally shifted) for every draw of a path where connections are on; \
          elsewhere for the first 5 draws (pixel, then light and BSDF samples of two vertices), an independent \
          PCG stream for later ones. Independent PCG samples throughout: {}; Sobol draws switched: {}. Without \
          connections, deep in a path each Sobol pair is stratified alone, not jointly with the earlier ones, \
-         and gains little, while a Sobol draw costs four times the integer multiplies of a PCG draw \
+         and gains little, while a Sobol draw costs up to twice the integer multiplies of a PCG draw \
          (`SOBOL_DRAWS` in pt-core gives the choice of 5); a connection draws four more numbers per vertex, \
          and with it Sobol for every draw reached relMSE 1e-3 sooner on every scene of the suite.\n\
          - Russian roulette from bounce 5, i.e. none within the default 5 bounces. From bounce 3: {}; from \

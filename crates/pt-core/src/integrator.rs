@@ -469,7 +469,7 @@ fn connection<V: SceneView, C: RayCounter>(
 }
 
 /// The samples of pixel (`x`, `y`) for one frame: `samples_per_frame`
-/// camera samples, from independent PCG streams or from the Owen-scrambled
+/// camera samples, from independent PCG streams or from the randomised
 /// Sobol sequence (`FLAG_SOBOL`), non-finite results counted and discarded.
 pub fn render_pixel(x: u32, y: u32, params: &FrameParams, geometry: &Geometry) -> PixelSamples {
     pixel(x, y, params, geometry, geometry, &mut NoRayCount)

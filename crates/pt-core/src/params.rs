@@ -12,8 +12,8 @@ pub const FLAG_NEE: u32 = 1;
 /// (power heuristic). Without it, light reached by BSDF rays is dropped
 /// while NEE is on.
 pub const FLAG_MIS: u32 = 2;
-/// `flags` bit: samples from the Owen-scrambled Sobol sequence instead of
-/// independent PCG streams.
+/// `flags` bit: samples from the randomised Sobol sequence
+/// (`sampler::SobolSampler`) instead of independent PCG streams.
 pub const FLAG_SOBOL: u32 = 4;
 /// `flags` bit: BSDF sampling mixes the glow lobe around the light
 /// (`light::GlowLobe`) into the cosine lobe.
@@ -55,7 +55,7 @@ pub const FLAG_NEE_CONTROL: u32 = 512;
 pub const FLAG_LIGHT_EDGE: u32 = 1024;
 /// The default, chosen by `pathtracer bench` (docs/PERFORMANCE.md): NEE
 /// (without MIS, by projected solid angle where the light is wholly above
-/// the horizon) and the glow lobe, on Owen-scrambled Sobol samples for the
+/// the horizon) and the glow lobe, on randomised Sobol samples for the
 /// first draws of each path. MIS makes the same image in the default scene
 /// and costs more per sample.
 pub const FLAGS_DEFAULT: u32 = FLAG_NEE | FLAG_NEE_PROJECTED | FLAG_SOBOL | FLAG_GLOW;

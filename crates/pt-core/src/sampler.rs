@@ -1,13 +1,25 @@
 //! Sample generators for the path loop: independent PCG numbers, or
-//! Owen-scrambled Sobol points (Burley, "Practical Hash-based Owen
-//! Scrambling", JCGT 9(4), 2020).
+//! randomised Sobol points.
 //!
 //! The Sobol sampler is "padded 2D": every pair of dimensions the path asks
 //! for (pixel jitter, then per bounce the light sample and the BSDF sample)
-//! is the 2D Sobol (0,2)-sequence, at the pixel's sample index, shuffled and
-//! Owen-scrambled with seeds hashed from the pixel, the user seed and the
-//! pair number. Each pair is then stratified at every power-of-two sample
-//! count, and pairs are decorrelated from each other and across pixels.
+//! is the 2D Sobol (0,2)-sequence at the pixel's sample index shuffled by
+//! Owen scrambling (Burley, "Practical Hash-based Owen Scrambling", JCGT
+//! 9(4), 2020), its values then randomised by a digital shift (an xor),
+//! each with seeds hashed from the pixel, the user seed and the pair
+//! number. Each pair is then stratified at every power-of-two sample count,
+//! and pairs are decorrelated from each other and across pixels.
+//!
+//! The values take a digital shift, not Burley's Owen scrambling: both keep
+//! every block of 2^m points a (0, m, 2)-net and make each point uniform,
+//! so the estimate stays unbiased, and at the sample counts the renderer
+//! runs (tens to hundreds per pixel, integrands cut by the edges of shadows
+//! and walls) relMSE was the same within a few per cent on the suite's
+//! scenes, while the shift saves the eight integer multiplies of two
+//! Laine-Karras hashes per draw (docs/ARCHITECTURE.md, "Samples", has the
+//! figures). The index shuffle keeps Owen scrambling: an xor of the index
+//! would only shift the values of a digital sequence again, and leave
+//! padded pairs correlated.
 //!
 //! One run of draws is jointly stratified instead of padded: the first
 //! bounce's direction and every draw of the vertex it finds, through that
@@ -108,20 +120,34 @@ pub fn sobol_2d(index: u32) -> (u32, u32) {
     (index.reverse_bits(), y)
 }
 
-/// The second Sobol dimension at `index`, bit-reversed: the same as
-/// `sobol_2d(index).1.reverse_bits()`, without a loop.
+/// The two values of the 2D Sobol point whose index bit-reversed is
+/// `index_reversed`, each shifted by an xor with its own seed (a digital
+/// shift), as 32-bit fractions: dimension 0 is the reversed index itself,
+/// dimension 1 [`sobol_dim1`] of it. The seeds must be independent and
+/// uniform for the points to be. The sampler keeps its indices reversed,
+/// so that no draw reverses bits (several instructions a lane on lavapipe
+/// without GFNI).
+#[inline]
+pub fn shifted_sobol_2d(index_reversed: u32, seed_0: u32, seed_1: u32) -> (u32, u32) {
+    (index_reversed ^ seed_0, sobol_dim1(index_reversed) ^ seed_1)
+}
+
+/// The second Sobol dimension at the index whose bit reversal is
+/// `index_reversed`: the same as `sobol_2d(index).1`, without a loop.
 ///
-/// Reversed, its direction numbers are v_k = (1 + x)^k over GF(2), whose
-/// coefficient j is 1 exactly when j is a submask of k (Lucas). So bit j of
-/// the result is the xor of the index bits k that are supermasks of j: a
-/// superset-sum transform, five shift-and-mask steps.
-pub fn sobol_dim1_reversed(index: u32) -> u32 {
-    let mut y = index;
-    y ^= (y >> 1) & 0x5555_5555;
-    y ^= (y >> 2) & 0x3333_3333;
-    y ^= (y >> 4) & 0x0f0f_0f0f;
-    y ^= (y >> 8) & 0x00ff_00ff;
-    y ^= (y >> 16) & 0x0000_ffff;
+/// Its direction numbers, read from the top bit down, are v_k = (1 + x)^k
+/// over GF(2), whose coefficient j is 1 exactly when j is a submask of k
+/// (Lucas). In the reversed index, bit 31 - k is index bit k; with the
+/// complements of the five-bit positions, bit m of the value is the xor of
+/// the reversed index's bits l that are submasks of m: a subset-sum
+/// transform, five shift-and-mask steps.
+pub fn sobol_dim1(index_reversed: u32) -> u32 {
+    let mut y = index_reversed;
+    y ^= (y << 1) & 0xaaaa_aaaa;
+    y ^= (y << 2) & 0xcccc_cccc;
+    y ^= (y << 4) & 0xf0f0_f0f0;
+    y ^= (y << 8) & 0xff00_ff00;
+    y ^= (y << 16) & 0xffff_0000;
     y
 }
 
@@ -162,16 +188,25 @@ pub fn joint_draws(flags: u32) -> u32 {
 /// the first three, twice each, as Sobol's own dimensions 0 to 3 do).
 /// Shifts and xors, where a Sobol dimension beyond the second would take a
 /// table walk per draw, which made lavapipe's frames 1.7 to 1.9 times as
-/// long in a trial. `pt-render`'s eight-lane sampler writes the same
-/// shifts out; its tests compare the two bit for bit.
+/// long in a trial. The sampler takes it bit-reversed
+/// ([`joint_index_reversed`]).
 #[inline]
 pub fn joint_index(g: u32, i: u32) -> u32 {
+    joint_index_reversed(g, i.reverse_bits()).reverse_bits()
+}
+
+/// [`joint_index`] bit-reversed, from the index bit-reversed (`r`): a right
+/// shift of the index is the same left shift of its reversal.
+/// `pt-render`'s eight-lane sampler writes the same shifts out; its tests
+/// compare the two bit for bit.
+#[inline]
+pub fn joint_index_reversed(g: u32, r: u32) -> u32 {
     match g {
-        0 => i,
-        1 => i ^ (i >> 2) ^ (i >> 6) ^ (i >> 7),
-        2 => i ^ (i >> 1) ^ (i >> 4) ^ (i >> 7),
-        3 => i ^ (i >> 1) ^ (i >> 5) ^ (i >> 8),
-        _ => i ^ (i >> 3) ^ (i >> 7),
+        0 => r,
+        1 => r ^ (r << 2) ^ (r << 6) ^ (r << 7),
+        2 => r ^ (r << 1) ^ (r << 4) ^ (r << 7),
+        3 => r ^ (r << 1) ^ (r << 5) ^ (r << 8),
+        _ => r ^ (r << 3) ^ (r << 7),
     }
 }
 
@@ -211,6 +246,22 @@ pub fn all_draws_joint(draws: u32, joint: u32) -> bool {
     joint > 0 && 2 * joint - 2 < JOINT_TRANSFORMS && draws < 2 * joint
 }
 
+/// The digital shift of a draw's first value, from the draw's seed (which
+/// the index shuffle takes as it is).
+#[inline]
+pub fn value_seed_0(seed: u32) -> u32 {
+    seed ^ 0xa511_e9b3
+}
+
+/// The digital shift of a draw's second value: the seed times an odd
+/// constant, a bijection whose leading bits, those that move the value
+/// most, depend on all of the seed's bits, where the first value's shift
+/// takes them as they are.
+#[inline]
+pub fn value_seed_1(seed: u32) -> u32 {
+    seed.wrapping_mul(0x2c1b_3c6d) ^ 0x297a_2d39
+}
+
 fn to_unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
@@ -223,20 +274,21 @@ fn to_unit(x: u32) -> f32 {
 /// direct light and the first indirect bounce, whose BSDF sample aims the
 /// glow lobe at the bright ceiling. Deeper, each pair is stratified alone
 /// but not jointly with the earlier ones, and gains little, while a Sobol
-/// draw costs 11 to 16 integer multiplies and two or three bit reversals
+/// draw costs 4 to 8 integer multiplies and two or three bit reversals
 /// against 2 to 4 multiplies for PCG. Five draws gave the lowest relMSE x
-/// time of the counts measured (CHANGELOG.md has the figures);
+/// time of the counts measured, when the values were Owen-scrambled and a
+/// draw cost 11 to 16 multiplies (CHANGELOG.md has the figures);
 /// `pathtracer bench` compares it with Sobol everywhere (`FLAG_SOBOL_DEEP`).
 pub const SOBOL_DRAWS: u32 = 5;
 
-/// Padded 2D Owen-scrambled Sobol samples for one camera sample, for its
-/// first `DRAWS` draws, then independent PCG numbers. `SobolSampler<{
-/// u32::MAX }>` draws every number from the Sobol sequence.
+/// Padded 2D Sobol samples (the index Owen-scrambled, the values digitally
+/// shifted) for one camera sample, for its first `DRAWS` draws, then
+/// independent PCG numbers. `SobolSampler<{ u32::MAX }>` draws every number
+/// from the Sobol sequence.
 #[derive(Copy, Clone, Debug)]
 pub struct SobolSampler<const DRAWS: u32 = SOBOL_DRAWS> {
-    /// Index of this sample among the pixel's samples (across frames).
-    index: u32,
-    /// The index bit-reversed, once for all padded draws.
+    /// Index of this sample among the pixel's samples (across frames),
+    /// bit-reversed: every draw works on the reversed index.
     index_reversed: u32,
     /// Hash of pixel and user seed.
     seed: u32,
@@ -267,14 +319,7 @@ impl<const DRAWS: u32> SobolSampler<DRAWS> {
         // Seeded by a hash of pixel, seed and index: distinct samples get
         // unrelated streams. Not needed when every draw is a Sobol point.
         let tail = if DRAWS == u32::MAX { 0 } else { pcg_hash(pixel_seed ^ index.wrapping_mul(0x9e37_79b9)) };
-        Self {
-            index,
-            index_reversed: index.reverse_bits(),
-            seed: pixel_seed,
-            pair: 0,
-            joint,
-            tail: Rng::from_state(tail),
-        }
+        Self { index_reversed: index.reverse_bits(), seed: pixel_seed, pair: 0, joint, tail: Rng::from_state(tail) }
     }
 
     /// The seed of the next dimension (pair): one hash per draw.
@@ -283,23 +328,21 @@ impl<const DRAWS: u32> SobolSampler<DRAWS> {
         pcg_hash(self.seed ^ self.pair.wrapping_mul(0x9e37_79b9))
     }
 
-    /// The sample index Owen-scrambled with `seed` (Burley's shuffle).
-    fn shuffled_index(&self, seed: u32) -> u32 {
-        laine_karras_permutation(self.index_reversed, seed).reverse_bits()
-    }
-
     /// The index of the 2D Sobol point of the draw just counted, whose seed
-    /// is `seed`: the index shuffled with that seed (Burley's padding), or
-    /// for the jointly stratified draws the unshuffled index's own
-    /// transform ([`joint_index`]). The joint draws need no shuffle to keep
-    /// apart from the padded ones: the scrambles of their values, seeded
-    /// per draw, decorrelate them from those and from other pixels.
-    fn point_index(&self, seed: u32) -> u32 {
+    /// is `seed`, bit-reversed: the index shuffled with that seed (Burley's
+    /// padding: Owen scrambling, `reverse(LK(reverse(i)))`, so reversed
+    /// the Laine-Karras permutation of the reversed index alone), or for
+    /// the jointly stratified draws the unshuffled index's own transform
+    /// ([`joint_index_reversed`]). The joint draws need no shuffle to keep
+    /// apart from the padded ones, whose own shuffles pair their samples
+    /// with the run's at random; the shifts of their values, seeded per
+    /// draw, decorrelate them from other pixels.
+    fn point_index_reversed(&self, seed: u32) -> u32 {
         let g = joint_transform(self.pair, self.joint);
         if g < JOINT_TRANSFORMS || all_draws_joint(DRAWS, self.joint) {
-            joint_index(g, self.index)
+            joint_index_reversed(g, self.index_reversed)
         } else {
-            self.shuffled_index(seed)
+            laine_karras_permutation(self.index_reversed, seed)
         }
     }
 }
@@ -321,11 +364,10 @@ impl<const DRAWS: u32> Sampler for SobolSampler<DRAWS> {
         if self.pair >= DRAWS {
             return self.tail.next_f32();
         }
-        // One dimension: the Owen-scrambled van der Corput sequence at the
-        // shuffled index.
+        // One dimension: the digitally shifted van der Corput sequence at
+        // the shuffled index (the first value of the pair `next_2d` draws).
         let seed = self.next_seed();
-        // scramble(reverse(i)) = reverse(LK(i)): one bit reversal saved.
-        to_unit(laine_karras_permutation(self.point_index(seed), seed ^ 0xa511_e9b3).reverse_bits())
+        to_unit(self.point_index_reversed(seed) ^ value_seed_0(seed))
     }
 
     fn next_2d(&mut self) -> Vec2 {
@@ -334,15 +376,8 @@ impl<const DRAWS: u32> Sampler for SobolSampler<DRAWS> {
         }
         let seed = self.next_seed();
         // Shuffle the index (Burley's padding) or transform it (a joint
-        // draw), then scramble each value with its own seed (derived
-        // without another hash: the Laine-Karras permutation mixes any seed
-        // difference).
-        let i = self.point_index(seed);
-        // Dimension 0 is reverse(i), so its scramble is reverse(LK(i));
-        // dimension 1 is built bit-reversed for the same saving.
-        let a = laine_karras_permutation(i, seed ^ 0xa511_e9b3).reverse_bits();
-        let b = laine_karras_permutation(sobol_dim1_reversed(i), seed.wrapping_mul(0x2c1b_3c6d) ^ 0x297a_2d39)
-            .reverse_bits();
+        // draw), then shift each value with its own seed.
+        let (a, b) = shifted_sobol_2d(self.point_index_reversed(seed), value_seed_0(seed), value_seed_1(seed));
         Vec2::new(to_unit(a), to_unit(b))
     }
 }
@@ -380,16 +415,20 @@ mod tests {
     }
 
     #[test]
-    fn owen_scrambling_keeps_the_net_property() {
-        // Scrambling the values (not the index) keeps each block a (0,m,2)-net.
+    fn shifted_points_are_sobols_shifted_and_keep_the_net_property() {
         for seed in [1u32, 77, 0xdead_beef] {
-            let pts: Vec<_> = (0..128)
-                .map(|i| {
-                    let (a, b) = sobol_2d(i);
-                    (nested_uniform_scramble(a, seed), nested_uniform_scramble(b, seed ^ 5))
-                })
-                .collect();
-            assert!(is_02_net(&pts, 7), "seed {seed}");
+            let (s0, s1) = (value_seed_0(seed), value_seed_1(seed));
+            let pts: Vec<_> = (0..128u32).map(|i| shifted_sobol_2d(i.reverse_bits(), s0, s1)).collect();
+            for (i, &(a, b)) in pts.iter().enumerate() {
+                let (x, y) = sobol_2d(i as u32);
+                assert_eq!((a, b), (x ^ s0, y ^ s1), "seed {seed} index {i}");
+            }
+            // Every aligned block of 2^m points stays a (0, m, 2)-net.
+            for m in 0..=7 {
+                for start in (0..128).step_by(1 << m) {
+                    assert!(is_02_net(&pts[start..start + (1 << m)], m), "seed {seed} m {m} start {start}");
+                }
+            }
         }
     }
 
@@ -409,9 +448,22 @@ mod tests {
     }
 
     #[test]
-    fn reversed_dimension_1_matches() {
-        for i in [0u32, 1, 2, 3, 77, 1023, 0xdead_beef, u32::MAX] {
-            assert_eq!(sobol_dim1_reversed(i), sobol_2d(i).1.reverse_bits());
+    fn dimension_1_from_the_reversed_index_matches() {
+        for i in [0u32, 1, 2, 3, 77, 1023, 0xdead_beef, u32::MAX].into_iter().chain(0..4096) {
+            assert_eq!(sobol_dim1(i.reverse_bits()), sobol_2d(i).1, "index {i}");
+        }
+    }
+
+    #[test]
+    fn reversed_joint_transforms_are_the_transforms_reversed() {
+        // joint_index is defined through the reversed form; check it
+        // against the right shifts it stands for.
+        let shifts: [&[u32]; 5] = [&[], &[2, 6, 7], &[1, 4, 7], &[1, 5, 8], &[3, 7]];
+        for (g, shifts) in shifts.iter().enumerate() {
+            for i in [0u32, 1, 77, 1023, 0xdead_beef, u32::MAX].into_iter().chain(0..4096) {
+                let right = shifts.iter().fold(i, |acc, &k| acc ^ (i >> k));
+                assert_eq!(joint_index(g as u32, i), right, "transform {g} index {i}");
+            }
         }
     }
 

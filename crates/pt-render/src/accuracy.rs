@@ -425,7 +425,7 @@ fn equal_expectations(t: &Device<'_>, out: &mut Vec<CaseResult>) -> Result<(), G
         ("the glow lobe off, with MIS (a large light in the open)", |s| {
             s.flags = (s.flags & !FLAG_GLOW) | FLAG_GLOW_SPARSE | FLAG_MIS
         }),
-        ("Owen-scrambled Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
+        ("randomised Sobol samples instead of independent ones", |s| s.flags ^= FLAG_SOBOL),
         ("NEE uniform in the light's cone, not by projected solid angle", |s| s.flags &= !FLAG_NEE_PROJECTED),
         ("NEE uniform in the light's cone, with MIS", |s| s.flags = (s.flags & !FLAG_NEE_PROJECTED) | FLAG_MIS),
         ("NEE uniform in the light's cone with the control variate", |s| {

@@ -434,15 +434,15 @@ fn laine_karras(x: U, seed: U) -> U {
     x.xor(x.wmul(U::splat(0x8d22_f6e6)))
 }
 
-/// `pt_core::sampler::sobol_dim1_reversed` on every lane.
+/// `pt_core::sampler::sobol_dim1` on every lane.
 #[inline(always)]
-fn sobol_dim1_reversed(i: U) -> U {
-    let mut y = i;
-    y = y.xor(y.shr::<1>().and(U::splat(0x5555_5555)));
-    y = y.xor(y.shr::<2>().and(U::splat(0x3333_3333)));
-    y = y.xor(y.shr::<4>().and(U::splat(0x0f0f_0f0f)));
-    y = y.xor(y.shr::<8>().and(U::splat(0x00ff_00ff)));
-    y.xor(y.shr::<16>().and(U::splat(0x0000_ffff)))
+fn sobol_dim1(r: U) -> U {
+    let mut y = r;
+    y = y.xor(y.shl::<1>().and(U::splat(0xaaaa_aaaa)));
+    y = y.xor(y.shl::<2>().and(U::splat(0xcccc_cccc)));
+    y = y.xor(y.shl::<4>().and(U::splat(0xf0f0_f0f0)));
+    y = y.xor(y.shl::<8>().and(U::splat(0xff00_ff00)));
+    y.xor(y.shl::<16>().and(U::splat(0xffff_0000)))
 }
 
 /// `to_unit` of the samplers: the top 24 bits as a fraction.
@@ -479,7 +479,6 @@ fn pcg4d(v: [U; 4]) -> [U; 4] {
 /// when `PCG` is false, `Rng` (every draw from the PCG stream) when true.
 #[derive(Copy, Clone)]
 struct Sampler<const DRAWS: u32, const PCG: bool> {
-    index: U,
     index_reversed: U,
     seed: U,
     pair: U,
@@ -505,13 +504,13 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
             let h = pcg4d([x, y, U::splat(params.frame), s.xor(pixel)]);
             let tail = h[0].xor(h[1].rotate_left::<16, 16>()).xor(h[2]).xor(h[3].rotate_left::<8, 24>());
             let zero = U::splat(0);
-            Self { index: zero, index_reversed: zero, seed: zero, pair: zero, joint: 0, tail }
+            Self { index_reversed: zero, seed: zero, pair: zero, joint: 0, tail }
         } else {
             let index = s.add(U::splat(params.sample_offset));
             let tail =
                 if DRAWS == u32::MAX { U::splat(0) } else { pcg_hash(pixel.xor(index.wmul(U::splat(0x9e37_79b9)))) };
             let joint = joint_draws(params.flags);
-            Self { index, index_reversed: index.reverse_bits(), seed: pixel, pair: U::splat(0), joint, tail }
+            Self { index_reversed: index.reverse_bits(), seed: pixel, pair: U::splat(0), joint, tail }
         }
     }
 
@@ -529,30 +528,25 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         pcg_hash(self.seed.xor(pair.wmul(U::splat(0x9e37_79b9))))
     }
 
+    /// `SobolSampler::point_index_reversed` on every lane, with
+    /// `pt_core::sampler::joint_index_reversed` written out for the lanes.
     #[inline(always)]
-    fn shuffled_index(&self, seed: U) -> U {
-        laine_karras(self.index_reversed, seed).reverse_bits()
-    }
-
-    /// `SobolSampler::point_index` on every lane, with
-    /// `pt_core::sampler::joint_index` written out for the lanes.
-    #[inline(always)]
-    fn point_index(&self, seed: U) -> U {
-        let (joint, i) = (self.joint, self.index);
+    fn point_index_reversed(&self, seed: U) -> U {
+        let (joint, i) = (self.joint, self.index_reversed);
         // `pt_core::sampler::joint_transform` on every lane.
         let before = self.pair.lt(U::splat(joint));
         let g = selu(before, self.pair.add(U::splat(joint.wrapping_sub(1))), self.pair.wsub(U::splat(joint)));
         let g = selu(self.pair.lt(U::splat(2 * joint)), g, U::splat(JOINT_TRANSFORMS));
-        let t1 = i.xor(i.shr::<2>()).xor(i.shr::<6>()).xor(i.shr::<7>());
-        let t2 = i.xor(i.shr::<1>()).xor(i.shr::<4>()).xor(i.shr::<7>());
-        let t3 = i.xor(i.shr::<1>()).xor(i.shr::<5>()).xor(i.shr::<8>());
-        let t4 = i.xor(i.shr::<3>()).xor(i.shr::<7>());
+        let t1 = i.xor(i.shl::<2>()).xor(i.shl::<6>()).xor(i.shl::<7>());
+        let t2 = i.xor(i.shl::<1>()).xor(i.shl::<4>()).xor(i.shl::<7>());
+        let t3 = i.xor(i.shl::<1>()).xor(i.shl::<5>()).xor(i.shl::<8>());
+        let t4 = i.xor(i.shl::<3>()).xor(i.shl::<7>());
         let at = |n: u32| g.eq(U::splat(n));
         let transformed = selu(at(0), i, selu(at(1), t1, selu(at(2), t2, selu(at(3), t3, t4))));
         if all_draws_joint(DRAWS, joint) {
             transformed
         } else {
-            selu(g.lt(U::splat(JOINT_TRANSFORMS)), transformed, self.shuffled_index(seed))
+            selu(g.lt(U::splat(JOINT_TRANSFORMS)), transformed, laine_karras(i, seed))
         }
     }
 
@@ -564,8 +558,7 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         let mut out = F::splat(0.0);
         if ms.any() {
             let seed = self.next_seed(ms);
-            let i = self.point_index(seed);
-            let v = laine_karras(i, seed.xor(U::splat(0xa511_e9b3))).reverse_bits();
+            let v = self.point_index_reversed(seed).xor(seed.xor(U::splat(0xa511_e9b3)));
             out = sel(ms, to_unit(v), out);
         }
         if mt.any() {
@@ -582,10 +575,12 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         let (mut a, mut b) = (F::splat(0.0), F::splat(0.0));
         if ms.any() {
             let seed = self.next_seed(ms);
-            let i = self.point_index(seed);
-            let x = laine_karras(i, seed.xor(U::splat(0xa511_e9b3))).reverse_bits();
+            let r = self.point_index_reversed(seed);
+            // `pt_core::sampler::shifted_sobol_2d` with `value_seed_0` and
+            // `value_seed_1`.
+            let x = r.xor(seed.xor(U::splat(0xa511_e9b3)));
             let y_seed = seed.wmul(U::splat(0x2c1b_3c6d)).xor(U::splat(0x297a_2d39));
-            let y = laine_karras(sobol_dim1_reversed(i), y_seed).reverse_bits();
+            let y = sobol_dim1(r).xor(y_seed);
             a = sel(ms, to_unit(x), a);
             b = sel(ms, to_unit(y), b);
         }
@@ -603,7 +598,6 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
         Self {
             index_reversed: selu(m, a.index_reversed, b.index_reversed),
             seed: selu(m, a.seed, b.seed),
-            index: selu(m, a.index, b.index),
             pair: selu(m, a.pair, b.pair),
             joint: a.joint,
             tail: selu(m, a.tail, b.tail),
