@@ -125,8 +125,7 @@ pub fn sobol_2d(index: u32) -> (u32, u32) {
 /// shift), as 32-bit fractions: dimension 0 is the reversed index itself,
 /// dimension 1 [`sobol_dim1`] of it. The seeds must be independent and
 /// uniform for the points to be. The sampler keeps its indices reversed,
-/// so that no draw reverses bits (several instructions a lane on lavapipe
-/// without GFNI).
+/// so that no draw reverses bits (several vector instructions each).
 #[inline]
 pub fn shifted_sobol_2d(index_reversed: u32, seed_0: u32, seed_1: u32) -> (u32, u32) {
     (index_reversed ^ seed_0, sobol_dim1(index_reversed) ^ seed_1)
@@ -274,8 +273,8 @@ fn to_unit(x: u32) -> f32 {
 /// direct light and the first indirect bounce, whose BSDF sample aims the
 /// glow lobe at the bright ceiling. Deeper, each pair is stratified alone
 /// but not jointly with the earlier ones, and gains little, while a Sobol
-/// draw costs 4 to 8 integer multiplies and two or three bit reversals
-/// against 2 to 4 multiplies for PCG. Five draws gave the lowest relMSE x
+/// draw costs 4 to 8 integer multiplies and no bit reversal against 2 to 4
+/// multiplies for PCG. Five draws gave the lowest relMSE x
 /// time of the counts measured, when the values were Owen-scrambled and a
 /// draw cost 11 to 16 multiplies (CHANGELOG.md has the figures);
 /// `pathtracer bench` compares it with Sobol everywhere (`FLAG_SOBOL_DEEP`).
