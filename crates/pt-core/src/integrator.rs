@@ -75,7 +75,7 @@ impl<S: Sampler> Path<S> {
     /// `FLAG_LIGHT_EDGE`).
     pub fn camera(x: u32, y: u32, pixel: S::Pixel, s: u32, edge: &LightEdge, params: &FrameParams) -> Self {
         let mut path = Self::start(pixel, s, params);
-        let u = path.sampler.next_2d();
+        let u = path.sampler.next_2d(pixel);
         path.aim_camera(x, y, u, edge, params);
         path
     }
@@ -119,7 +119,7 @@ impl<S: Sampler> Path<S> {
     /// light, the bounce limit, the last vertex; or a path that ended at its
     /// previous step), the step writes its radiance to `finished`, returns
     /// true, and starts the pixel's next sample (`next` of pixel (`x`, `y`),
-    /// sampler part `pixel`, light edge `edge`) in its place: the next sample's camera ray
+    /// light edge `edge`, sampler part `pixel`) in its place: the next sample's camera ray
     /// takes the draw that a continuing path spends on its BSDF direction.
     /// lavapipe runs every line of the loop in every pass, masked, so a
     /// camera draw of its own, after the step, cost a Sobol draw per pass
@@ -139,6 +139,10 @@ impl<S: Sampler> Path<S> {
     /// Russian roulette's, for frames where it cannot act
     /// ([`roulette_acts`]): the same path, without code that lavapipe
     /// would run masked whatever the flags.
+    ///
+    /// `pixel` is an argument of its own: inside the tuple, a struct
+    /// beside the reference made rust-gpu emit a struct with a pointer
+    /// member, which naga rejects.
     #[allow(clippy::too_many_arguments)]
     pub fn step<V: SceneView, C: RayCounter, const CONNECT: bool, const GLOW: bool, const ROULETTE: bool>(
         &mut self,
@@ -146,7 +150,8 @@ impl<S: Sampler> Path<S> {
         scene: &V,
         shadow_walls: &ShadowWalls,
         rays: &mut C,
-        (x, y, pixel, next, edge): (u32, u32, S::Pixel, u32, &LightEdge),
+        (x, y, next, edge): (u32, u32, u32, &LightEdge),
+        pixel: S::Pixel,
         finished: &mut Vec3,
     ) -> bool {
         let nee = params.flags & FLAG_NEE != 0;
@@ -176,7 +181,10 @@ impl<S: Sampler> Path<S> {
                 // NEE alone accounts for light reached after a bounce.
                 0.0
             };
-            self.radiance += self.throughput * light.radiance * (weight * self.direct_weight);
+            // 1 without connections' code: lavapipe would not fold the
+            // field's constant through the loop.
+            let direct_weight = if CONNECT { self.direct_weight } else { 1.0 };
+            self.radiance += self.throughput * light.radiance * (weight * direct_weight);
         }
         // The three ways a path ends at its hit, and a dead path.
         let mut ended = !live || missed || at_light || self.bounces >= params.max_bounces;
@@ -236,7 +244,7 @@ impl<S: Sampler> Path<S> {
             // visible above the horizon the estimate is exactly that.
             control = nee && nee_control(params.flags) && !cone.is_empty();
             if nee && !cone.is_empty() {
-                let u = self.sampler.next_2d();
+                let u = self.sampler.next_2d(pixel);
                 let (dir, dist) = if projected { cone.sample_projected(n, u.x, u.y) } else { cone.sample(u.x, u.y) };
                 let cos = n.dot(dir);
                 let shadow = Ray { origin, dir };
@@ -277,7 +285,7 @@ impl<S: Sampler> Path<S> {
                 }
             }
             if connect && self.bounces + 1 < params.max_bounces {
-                let (u, v) = (self.sampler.next_2d(), self.sampler.next_2d());
+                let (u, v) = (self.sampler.next_2d(pixel), self.sampler.next_2d(pixel));
                 let through = connection(n, origin, &scatter, u, v, params, scene, shadow_walls, rays);
                 self.radiance += self.throughput * albedo * through;
             }
@@ -290,7 +298,7 @@ impl<S: Sampler> Path<S> {
             *self = Self::start(pixel, next, params);
         }
         // One draw: the next sample's pixel jitter, or the BSDF direction.
-        let u = self.sampler.next_2d();
+        let u = self.sampler.next_2d(pixel);
         if ended {
             self.aim_camera(x, y, u, edge, params);
         } else {
@@ -321,7 +329,7 @@ impl<S: Sampler> Path<S> {
                     t.max_element()
                 };
                 let survive = follow.clamp(RR_MIN_SURVIVAL, 1.0);
-                dead |= self.sampler.next_1d() >= survive;
+                dead |= self.sampler.next_1d(pixel) >= survive;
                 self.throughput /= survive;
             }
 
@@ -624,7 +632,8 @@ fn pixel_samples<
             scene,
             &shadow_walls,
             rays,
-            (x, y, pixel, s + 1, &edge),
+            (x, y, s + 1, &edge),
+            pixel,
             &mut l,
         ) {
             if is_finite(l) {

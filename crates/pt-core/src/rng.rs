@@ -5,7 +5,7 @@
 //! frames and samples get unrelated streams), then each dimension of the
 //! path draws the next output of a PCG RXS-M-XS 32-bit generator.
 
-use spirv_std::glam::UVec4;
+use spirv_std::glam::{UVec4, Vec2};
 
 /// `pcg` one-dimensional hash (Jarzynski and Olano 2020).
 pub fn pcg_hash(v: u32) -> u32 {
@@ -66,6 +66,12 @@ impl Rng {
     /// A uniform float in [0, 1): the top 24 bits, so every value is exact.
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    /// Two uniform floats in [0, 1), in the order drawn.
+    pub fn next_pair(&mut self) -> Vec2 {
+        let u = self.next_f32();
+        Vec2::new(u, self.next_f32())
     }
 }
 

@@ -49,6 +49,13 @@ use crate::params::{FLAG_CONNECT, FLAG_NEE, FrameParams};
 use crate::rng::{Rng, pcg_hash};
 
 /// What the path loop draws its random numbers from.
+///
+/// A draw takes what the pixel's samples share (`Self::Pixel`) as an
+/// argument instead of keeping it in the sample's state: the path loop
+/// carries its state from one pass to the next, and lavapipe folds nothing
+/// that goes round a loop, not even a constant of the flags compiled into
+/// the small-scene kernels (docs/ARCHITECTURE.md, "The small-scene
+/// kernel"), where the pixel's part, made before the loop, is folded.
 pub trait Sampler {
     /// What the generators of one pixel's camera samples share in a frame
     /// (hashes of the pixel and the seed): worked out once per pixel, not
@@ -59,10 +66,12 @@ pub trait Sampler {
     fn for_pixel(x: u32, y: u32, params: &FrameParams) -> Self::Pixel;
     /// The generator for camera sample `s` of the pixel `pixel` was made for.
     fn for_camera_sample(pixel: Self::Pixel, s: u32, params: &FrameParams) -> Self;
-    /// The next number in [0, 1).
-    fn next_1d(&mut self) -> f32;
-    /// The next pair of numbers in [0, 1)^2.
-    fn next_2d(&mut self) -> Vec2;
+    /// The next number in [0, 1), for a sample of the pixel whose shared
+    /// part is `pixel`.
+    fn next_1d(&mut self, pixel: Self::Pixel) -> f32;
+    /// The next pair of numbers in [0, 1)^2, for a sample of the pixel
+    /// whose shared part is `pixel`.
+    fn next_2d(&mut self, pixel: Self::Pixel) -> Vec2;
 }
 
 impl Sampler for Rng {
@@ -77,13 +86,12 @@ impl Sampler for Rng {
         Rng::with_seed_hash(x, y, params.frame, s, seed_hash)
     }
 
-    fn next_1d(&mut self) -> f32 {
+    fn next_1d(&mut self, _: Self::Pixel) -> f32 {
         self.next_f32()
     }
 
-    fn next_2d(&mut self) -> Vec2 {
-        let u = self.next_f32();
-        Vec2::new(u, self.next_f32())
+    fn next_2d(&mut self, _: Self::Pixel) -> Vec2 {
+        self.next_pair()
     }
 }
 
@@ -280,6 +288,25 @@ fn to_unit(x: u32) -> f32 {
 /// `pathtracer bench` compares it with Sobol everywhere (`FLAG_SOBOL_DEEP`).
 pub const SOBOL_DRAWS: u32 = 5;
 
+/// What the Sobol samples of one pixel share: [`Sampler::Pixel`] of
+/// [`SobolSampler`].
+#[derive(Copy, Clone, Debug)]
+pub struct SobolPixel {
+    /// Hash of pixel and user seed.
+    seed: u32,
+    /// The first jointly stratified draw, and how many there are
+    /// ([`joint_draws`]).
+    joint: u32,
+}
+
+impl SobolPixel {
+    /// Pixel (`x`, `y`) for user seed `seed`, for the draws of integrator
+    /// `flags` ([`joint_draws`]).
+    pub fn new(x: u32, y: u32, seed: u32, flags: u32) -> Self {
+        Self { seed: pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed)))), joint: joint_draws(flags) }
+    }
+}
+
 /// Padded 2D Sobol samples (the index Owen-scrambled, the values digitally
 /// shifted) for one camera sample, for its first `DRAWS` draws, then
 /// independent PCG numbers. `SobolSampler<{ u32::MAX }>` draws every number
@@ -289,42 +316,26 @@ pub struct SobolSampler<const DRAWS: u32 = SOBOL_DRAWS> {
     /// Index of this sample among the pixel's samples (across frames),
     /// bit-reversed: every draw works on the reversed index.
     index_reversed: u32,
-    /// Hash of pixel and user seed.
-    seed: u32,
     /// Draws made so far (the number of the next pair, from 0).
     pair: u32,
-    /// The first jointly stratified draw, and how many there are
-    /// ([`joint_draws`]).
-    joint: u32,
     /// The stream of the draws after the first `DRAWS`.
     tail: Rng,
 }
 
 impl<const DRAWS: u32> SobolSampler<DRAWS> {
-    /// The sampler of sample `index` of pixel (`x`, `y`) for `seed`, for
-    /// the draws of integrator `flags` ([`joint_draws`]).
-    pub fn new(x: u32, y: u32, index: u32, seed: u32, flags: u32) -> Self {
-        Self::with_pixel_seed(Self::pixel_seed(x, y, seed), index, joint_draws(flags))
-    }
-
-    /// The hash of pixel (`x`, `y`) and `seed` that all its samples share.
-    fn pixel_seed(x: u32, y: u32, seed: u32) -> u32 {
-        pcg_hash(pcg_hash(x ^ pcg_hash(y ^ pcg_hash(seed))))
-    }
-
-    /// The sampler of sample `index` of the pixel whose
-    /// [`SobolSampler::pixel_seed`] is `pixel_seed`.
-    fn with_pixel_seed(pixel_seed: u32, index: u32, joint: u32) -> Self {
+    /// The sampler of sample `index` of the pixel `pixel`.
+    pub fn new(pixel: SobolPixel, index: u32) -> Self {
         // Seeded by a hash of pixel, seed and index: distinct samples get
         // unrelated streams. Not needed when every draw is a Sobol point.
-        let tail = if DRAWS == u32::MAX { 0 } else { pcg_hash(pixel_seed ^ index.wrapping_mul(0x9e37_79b9)) };
-        Self { index_reversed: index.reverse_bits(), seed: pixel_seed, pair: 0, joint, tail: Rng::from_state(tail) }
+        let tail = if DRAWS == u32::MAX { 0 } else { pcg_hash(pixel.seed ^ index.wrapping_mul(0x9e37_79b9)) };
+        Self { index_reversed: index.reverse_bits(), pair: 0, tail: Rng::from_state(tail) }
     }
 
-    /// The seed of the next dimension (pair): one hash per draw.
-    fn next_seed(&mut self) -> u32 {
+    /// The seed of the next dimension (pair) of a sample of `pixel`: one
+    /// hash per draw.
+    fn next_seed(&mut self, pixel: SobolPixel) -> u32 {
         self.pair += 1;
-        pcg_hash(self.seed ^ self.pair.wrapping_mul(0x9e37_79b9))
+        pcg_hash(pixel.seed ^ self.pair.wrapping_mul(0x9e37_79b9))
     }
 
     /// The index of the 2D Sobol point of the draw just counted, whose seed
@@ -336,9 +347,9 @@ impl<const DRAWS: u32> SobolSampler<DRAWS> {
     /// apart from the padded ones, whose own shuffles pair their samples
     /// with the run's at random; the shifts of their values, seeded per
     /// draw, decorrelate them from other pixels.
-    fn point_index_reversed(&self, seed: u32) -> u32 {
-        let g = joint_transform(self.pair, self.joint);
-        if g < JOINT_TRANSFORMS || all_draws_joint(DRAWS, self.joint) {
+    fn point_index_reversed(&self, pixel: SobolPixel, seed: u32) -> u32 {
+        let g = joint_transform(self.pair, pixel.joint);
+        if g < JOINT_TRANSFORMS || all_draws_joint(DRAWS, pixel.joint) {
             joint_index_reversed(g, self.index_reversed)
         } else {
             laine_karras_permutation(self.index_reversed, seed)
@@ -347,36 +358,35 @@ impl<const DRAWS: u32> SobolSampler<DRAWS> {
 }
 
 impl<const DRAWS: u32> Sampler for SobolSampler<DRAWS> {
-    /// [`SobolSampler::pixel_seed`].
-    type Pixel = u32;
+    type Pixel = SobolPixel;
 
     fn for_pixel(x: u32, y: u32, params: &FrameParams) -> Self::Pixel {
-        Self::pixel_seed(x, y, params.seed)
+        SobolPixel::new(x, y, params.seed, params.flags)
     }
 
     fn for_camera_sample(pixel: Self::Pixel, s: u32, params: &FrameParams) -> Self {
         // The index runs on across frames: stratified over the whole render.
-        Self::with_pixel_seed(pixel, params.sample_offset + s, joint_draws(params.flags))
+        Self::new(pixel, params.sample_offset + s)
     }
 
-    fn next_1d(&mut self) -> f32 {
+    fn next_1d(&mut self, pixel: Self::Pixel) -> f32 {
         if self.pair >= DRAWS {
             return self.tail.next_f32();
         }
         // One dimension: the digitally shifted van der Corput sequence at
         // the shuffled index (the first value of the pair `next_2d` draws).
-        let seed = self.next_seed();
-        to_unit(self.point_index_reversed(seed) ^ value_seed_0(seed))
+        let seed = self.next_seed(pixel);
+        to_unit(self.point_index_reversed(pixel, seed) ^ value_seed_0(seed))
     }
 
-    fn next_2d(&mut self) -> Vec2 {
+    fn next_2d(&mut self, pixel: Self::Pixel) -> Vec2 {
         if self.pair >= DRAWS {
-            return self.tail.next_2d();
+            return self.tail.next_pair();
         }
-        let seed = self.next_seed();
+        let seed = self.next_seed(pixel);
         // Shuffle the index (Burley's padding) or transform it (a joint
         // draw), then shift each value with its own seed.
-        let (a, b) = shifted_sobol_2d(self.point_index_reversed(seed), value_seed_0(seed), value_seed_1(seed));
+        let (a, b) = shifted_sobol_2d(self.point_index_reversed(pixel, seed), value_seed_0(seed), value_seed_1(seed));
         Vec2::new(to_unit(a), to_unit(b))
     }
 }
@@ -385,6 +395,29 @@ impl<const DRAWS: u32> Sampler for SobolSampler<DRAWS> {
 mod tests {
     use super::*;
     use crate::params::FLAGS_DEFAULT;
+
+    /// A Sobol sample with its pixel's shared part, for tests that draw
+    /// from one sample at a time.
+    struct Bound<const DRAWS: u32> {
+        sampler: SobolSampler<DRAWS>,
+        pixel: SobolPixel,
+    }
+
+    impl<const DRAWS: u32> Bound<DRAWS> {
+        /// Sample `index` of pixel (`x`, `y`) for `seed` under `flags`.
+        fn new(x: u32, y: u32, index: u32, seed: u32, flags: u32) -> Self {
+            let pixel = SobolPixel::new(x, y, seed, flags);
+            Self { sampler: SobolSampler::new(pixel, index), pixel }
+        }
+
+        fn next_1d(&mut self) -> f32 {
+            self.sampler.next_1d(self.pixel)
+        }
+
+        fn next_2d(&mut self) -> Vec2 {
+            self.sampler.next_2d(self.pixel)
+        }
+    }
 
     /// Whether the points fill every elementary interval of area 1/n of
     /// every shape (2^k x 2^(m-k)) with exactly one point: the (0, m, 2)-net
@@ -473,7 +506,7 @@ mod tests {
         for pair in 0..4 {
             let pts: Vec<(u32, u32)> = (0..256)
                 .map(|i| {
-                    let mut s: SobolSampler = SobolSampler::new(7, 9, i, 3, FLAGS_DEFAULT);
+                    let mut s = Bound::<SOBOL_DRAWS>::new(7, 9, i, 3, FLAGS_DEFAULT);
                     for _ in 0..pair {
                         s.next_2d();
                     }
@@ -495,12 +528,12 @@ mod tests {
             let (sobol, pcg) = (SobolSampler::<SOBOL_DRAWS>::for_pixel(x, y, &params), Rng::for_pixel(x, y, &params));
             for s in [0u32, 1, 63] {
                 let mut split: SobolSampler = SobolSampler::for_camera_sample(sobol, s, &params);
-                let mut direct: SobolSampler = SobolSampler::new(x, y, 1000 + s, 42, 0);
+                let mut direct = Bound::<SOBOL_DRAWS>::new(x, y, 1000 + s, 42, 0);
                 let mut split_pcg = Rng::for_camera_sample(pcg, s, &params);
                 let mut direct_pcg = Rng::new(x, y, 3, s, 42);
                 // Past SOBOL_DRAWS: the PCG tail is the same too.
                 for _ in 0..SOBOL_DRAWS + 3 {
-                    assert_eq!(split.next_2d(), direct.next_2d(), "pixel ({x}, {y}) sample {s}");
+                    assert_eq!(split.next_2d(sobol), direct.next_2d(), "pixel ({x}, {y}) sample {s}");
                     assert_eq!(split_pcg.next_u32(), direct_pcg.next_u32(), "pixel ({x}, {y}) sample {s}");
                 }
             }
@@ -510,7 +543,7 @@ mod tests {
     /// The draw number `draw` (from 0, all 2D) of sample `index` of pixel
     /// (`x`, 5), seed 1, from the default sampler.
     fn nth_draw(x: u32, index: u32, draw: u32) -> Vec2 {
-        let mut s: SobolSampler = SobolSampler::new(x, 5, index, 1, FLAGS_DEFAULT);
+        let mut s = Bound::<SOBOL_DRAWS>::new(x, 5, index, 1, FLAGS_DEFAULT);
         for _ in 0..draw {
             s.next_2d();
         }
@@ -522,8 +555,8 @@ mod tests {
         // The default sampler is the all-Sobol one cut short: the same first
         // SOBOL_DRAWS draws (mixed 1D and 2D), then other numbers.
         for index in [0u32, 1, 77] {
-            let mut short: SobolSampler = SobolSampler::new(3, 4, index, 6, FLAGS_DEFAULT);
-            let mut deep = SobolSampler::<{ u32::MAX }>::new(3, 4, index, 6, FLAGS_DEFAULT);
+            let mut short = Bound::<SOBOL_DRAWS>::new(3, 4, index, 6, FLAGS_DEFAULT);
+            let mut deep = Bound::<{ u32::MAX }>::new(3, 4, index, 6, FLAGS_DEFAULT);
             for draw in 0..SOBOL_DRAWS {
                 if draw == 2 {
                     assert_eq!(short.next_1d(), deep.next_1d(), "index {index} draw {draw}");
@@ -571,7 +604,7 @@ mod tests {
 
     #[test]
     fn sampler_values_are_in_unit_square_and_pairs_differ() {
-        let mut s: SobolSampler = SobolSampler::new(3, 4, 5, 6, FLAGS_DEFAULT);
+        let mut s = Bound::<SOBOL_DRAWS>::new(3, 4, 5, 6, FLAGS_DEFAULT);
         let a = s.next_2d();
         let b = s.next_2d();
         assert!(a.x >= 0.0 && a.x < 1.0 && a.y >= 0.0 && a.y < 1.0);
@@ -602,7 +635,7 @@ mod tests {
         let first = joint_draws(flags);
         (0..samples)
             .map(|i| {
-                let mut s: SobolSampler<{ u32::MAX }> = SobolSampler::new(11, 4, i, 9, flags);
+                let mut s = Bound::<{ u32::MAX }>::new(11, 4, i, 9, flags);
                 for _ in 1..first {
                     s.next_2d();
                 }
@@ -625,7 +658,7 @@ mod tests {
         for (flags, n) in [(FLAGS_DEFAULT, 5u32), (0, 3)] {
             let mut cells: Vec<Vec<u32>> = (0..1u32 << (2 * n))
                 .map(|i| {
-                    let mut s: SobolSampler<{ u32::MAX }> = SobolSampler::new(2, 8, i, 4, flags);
+                    let mut s = Bound::<{ u32::MAX }>::new(2, 8, i, 4, flags);
                     (0..n)
                         .flat_map(|_| {
                             let u = s.next_2d();
