@@ -491,8 +491,9 @@ impl<const DRAWS: u32, const PCG: bool> Sampler<DRAWS, PCG> {
     /// `Sampler::for_pixel`: `SobolPixel`'s seed (Sobol) or the seed's
     /// hash (PCG, whose stream also takes the pixel's coordinates).
     /// `SobolPixel`'s joint count, the same on every lane, stays in the
-    /// sampler (`joint`): this code is compiled by rustc, which folds it
-    /// either way, unlike lavapipe with the scalar sampler's state.
+    /// sampler (`joint`): one scalar for the eight lanes, which costs no
+    /// vector work, where lavapipe holds every value of the scalar
+    /// sampler's state eight wide.
     #[inline(always)]
     fn for_pixel(x: U, y: U, params: &FrameParams) -> U {
         let seed_hash = U::splat(pt_core::rng::pcg_hash(params.seed));
